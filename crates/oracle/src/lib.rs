@@ -1,0 +1,21 @@
+//! # nlrt-oracle
+//!
+//! Arbitrary-precision reference computations (GMP rationals and MPFR floats through `rug`)
+//! that tell a true answer from a rounding artefact. Unpublished: used by the tests and the
+//! reports, never by the renderer.
+//!
+//! - [`ExactPoly::real_roots`]: every real root of a polynomial of degree <= 3 with f32/f64
+//!   coefficients (taken as exact rationals), with multiplicity, to at least
+//!   [`ROOT_BITS`] bits.
+//! - [`Truth::judge`]: a solver's answer measured against them: error in ulps of the target
+//!   type, missed roots, spurious roots, with tolerances scaled by each root's conditioning.
+//! - [`families`]: the hard cubic families and random generators shared by tests and reports.
+//!
+//! Building it needs GMP's build tools (`m4`); the project's test script installs them.
+
+pub mod exact;
+pub mod families;
+pub mod measure;
+
+pub use exact::{ExactPoly, ROOT_BITS, RealRoot};
+pub use measure::{Tolerance, Truth, Verdict, judge, ulp};

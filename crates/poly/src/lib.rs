@@ -1,0 +1,48 @@
+//! # nlrt-poly
+//!
+//! Robust real-root finders for quadratics and cubics, generic over `f32` and `f64`, `no_std`.
+//!
+//! Every ray-microtriangle test of nonlinear ray tracing (Ogaki 2023, Eq. 9-10) solves a cubic
+//! in the height `h` restricted to `[h_in, h_out]`, and every ray-box test in texture space
+//! solves quadratics. These solvers are built for that: restricted to an interval, nearest
+//! root first, no heap, and accurate to the conditioning of each root on hard inputs (huge
+//! root spreads, extreme magnitudes, clusters, multiple and tangential roots) where closed
+//! forms fail.
+//!
+//! Coefficients are given by ascending power: `c[i]` multiplies `x^i`.
+//!
+//! ```
+//! use nlrt_poly::{solve_cubic_in, solve_quadratic};
+//! // 2 x^3 - 3 x^2 + x = x (2x - 1)(x - 1), roots in [0.25, 2]:
+//! let roots = solve_cubic_in([0.0f64, 1.0, -3.0, 2.0], 0.25, 2.0);
+//! assert_eq!(roots.as_slice(), &[0.5, 1.0]);
+//! assert_eq!(solve_quadratic([-4.0f32, 0.0, 1.0]).as_slice(), &[-2.0, 2.0]);
+//! ```
+//!
+//! ## Features
+//! - `std` (default): float functions from the standard library.
+//! - `libm`: float functions from the `libm` crate for `no_std` builds.
+//!
+//! One of the two must be enabled. Build with the `fma` target feature (the workspace sets
+//! `target-cpu=x86-64-v3`) so that [`Real::mul_add`] is one instruction.
+#![no_std]
+#![warn(missing_docs)]
+
+#[cfg(not(any(feature = "std", feature = "libm")))]
+compile_error!("nlrt-poly needs the `std` or the `libm` feature for sqrt, cbrt and fma");
+
+#[cfg(feature = "std")]
+extern crate std;
+
+pub mod baseline;
+mod cubic;
+mod eval;
+mod quadratic;
+mod real;
+mod roots;
+
+pub use cubic::{first_cubic_root_in, solve_cubic, solve_cubic_in};
+pub use eval::{horner, horner_with_bound};
+pub use quadratic::{discriminant, solve_quadratic, solve_quadratic_in};
+pub use real::Real;
+pub use roots::Roots;

@@ -1,0 +1,230 @@
+//! Real roots of `c[0] + c[1] x + c[2] x^2`.
+
+use crate::eval::{horner_with_bound, normalize, safe_coefficient_exponent};
+use crate::{Real, Roots};
+
+/// All distinct real roots of `c[0] + c[1] x + c[2] x^2`, in increasing order.
+///
+/// - Stable formulation: the discriminant is computed with Kahan's FMA correction (accurate
+///   even when `b^2` and `4ac` nearly cancel), and the roots as `q / c[2]` and `c[0] / q` with
+///   `q = -(b + sign(b) sqrt(D)) / 2`, so neither suffers cancellation.
+/// - Coefficients and variable are rescaled by exact powers of two, so huge or tiny
+///   coefficients neither overflow nor underflow on the way.
+/// - `c[2] == 0` is the linear case; a double root is reported once.
+/// - Roots whose value overflows the type are dropped.
+/// - Non-finite coefficients, and the zero polynomial (every `x` is a root), give no roots.
+///
+/// ```
+/// use nlrt_poly::solve_quadratic;
+/// // x^2 - 3x + 2 = (x - 1)(x - 2)
+/// assert_eq!(solve_quadratic([2.0f64, -3.0, 1.0]).as_slice(), &[1.0, 2.0]);
+/// // Linear: 2x - 1
+/// assert_eq!(solve_quadratic([-1.0f32, 2.0, 0.0]).as_slice(), &[0.5]);
+/// // No cancellation for a tiny root next to a huge one.
+/// let r = solve_quadratic([1.0f64, 1e10, 1.0]);
+/// assert!((r[1] + 1e-10).abs() < 1e-25);
+/// ```
+#[must_use]
+pub fn solve_quadratic<T: Real>(c: [T; 3]) -> Roots<T> {
+    let [c0, c1, c2] = c;
+    if !(c0.is_finite() && c1.is_finite() && c2.is_finite()) {
+        return Roots::none();
+    }
+    if c2 == T::ZERO {
+        return linear_root(c0, c1);
+    }
+    if c0 == T::ZERO {
+        // x (c1 + c2 x): the root 0 and -c1/c2.
+        let other = -c1 / c2;
+        let mut roots = Roots::none();
+        if other == T::ZERO || !other.is_finite() {
+            roots.push(T::ZERO);
+        } else if other < T::ZERO {
+            roots.push(other);
+            roots.push(T::ZERO);
+        } else {
+            roots.push(T::ZERO);
+            roots.push(other);
+        }
+        return roots;
+    }
+    // Balance the variable, x = 2^k y, so that |c0| ~ |c2| 2^(2k): the product of the roots is
+    // then near 1 and neither b^2 nor 4ac can underflow to nothing. Only needed when the roots
+    // are extreme; the common case skips it.
+    let (e0, e2) = (c0.exponent(), c2.exponent());
+    let k = if (e0 - e2).abs() > safe_coefficient_exponent::<T>() { (e0 - e2) >> 1 } else { 0 };
+    let [c0, c1, c2] = if k == 0 {
+        normalize([c0, c1, c2])
+    } else {
+        normalize([c0, c1.scale_pow2(k), c2.scale_pow2(2 * k)])
+    };
+
+    let d = discriminant(c0, c1, c2);
+    if d < T::ZERO {
+        return Roots::none();
+    }
+    let q = -(c1 + d.sqrt().copysign(c1)) * T::HALF;
+    let mut roots = Roots::none();
+    if d == T::ZERO {
+        roots.push(unscale(q / c2, k));
+        return roots;
+    }
+    let (r1, r2) = (unscale(q / c2, k), unscale(c0 / q, k));
+    let (small, large) = if r1 <= r2 { (r1, r2) } else { (r2, r1) };
+    for r in [small, large] {
+        if r.is_finite() {
+            roots.push(r);
+        }
+    }
+    roots
+}
+
+/// Distinct real roots of `c[0] + c[1] x + c[2] x^2` in `[lo, hi]`, in increasing order.
+///
+/// Ends may be infinite. A root that rounding placed just outside the interval is reported
+/// as the end it crossed when the polynomial at that end is indistinguishable from zero
+/// (within the rounding-error bound of its evaluation), so a root lying exactly on an end
+/// is never lost. An empty or NaN interval gives no roots.
+///
+/// ```
+/// use nlrt_poly::solve_quadratic_in;
+/// // (x - 1)(x - 2) on [1.5, 4]
+/// assert_eq!(solve_quadratic_in([2.0f32, -3.0, 1.0], 1.5, 4.0).as_slice(), &[2.0]);
+/// // Ends exactly on the roots keep them.
+/// assert_eq!(solve_quadratic_in([2.0f64, -3.0, 1.0], 1.0, 2.0).as_slice(), &[1.0, 2.0]);
+/// ```
+#[must_use]
+pub fn solve_quadratic_in<T: Real>(c: [T; 3], lo: T, hi: T) -> Roots<T> {
+    if !(lo <= hi) {
+        return Roots::none();
+    }
+    let all = solve_quadratic(c);
+    let mut out = Roots::none();
+    for &r in all.as_slice() {
+        let kept = if r < lo {
+            is_pseudo_root(&c, lo).then_some(lo)
+        } else if r > hi {
+            is_pseudo_root(&c, hi).then_some(hi)
+        } else {
+            Some(r)
+        };
+        if let Some(v) = kept
+            && out.last() != Some(&v)
+        {
+            out.push(v);
+        }
+    }
+    out
+}
+
+/// Whether `p(x)` is within the rounding-error bound of zero at a finite `x`.
+#[inline]
+fn is_pseudo_root<T: Real>(c: &[T; 3], x: T) -> bool {
+    if !x.is_finite() {
+        return false;
+    }
+    let (v, bound) = horner_with_bound(&normalize(*c), x);
+    v.abs() <= bound
+}
+
+/// `b^2 - 4ac` with Kahan's correction: the FMA residuals of both products are added back,
+/// so the result is accurate to a few ulps even when the two products nearly cancel
+/// (W. Kahan, "On the Cost of Floating-Point Computation Without Extra-Precise Arithmetic",
+/// 2004; with FMA the residuals are exact).
+#[must_use]
+#[inline(always)]
+pub fn discriminant<T: Real>(a0: T, a1: T, a2: T) -> T {
+    let p = a1 * a1;
+    let four_a2 = a2 * T::from_i32(4); // exact: a power-of-two scaling
+    let q = four_a2 * a0;
+    let dp = a1.mul_add(a1, -p);
+    let dq = four_a2.mul_add(a0, -q);
+    (p - q) + (dp - dq)
+}
+
+#[inline(always)]
+fn unscale<T: Real>(y: T, k: i32) -> T {
+    if k == 0 { y } else { y.scale_pow2(k) }
+}
+
+#[inline]
+fn linear_root<T: Real>(c0: T, c1: T) -> Roots<T> {
+    let mut roots = Roots::none();
+    if c1 != T::ZERO {
+        let r = -c0 / c1;
+        if r.is_finite() {
+            roots.push(r);
+        }
+    }
+    roots
+}
+
+#[cfg(test)]
+mod tests {
+    macro_rules! quadratic_tests {
+        ($($t:ident),*) => {$(
+            mod $t {
+                use crate::{solve_quadratic, solve_quadratic_in};
+                type T = $t;
+
+                #[test]
+                fn simple_roots() {
+                    assert_eq!(solve_quadratic::<T>([2.0, -3.0, 1.0]).as_slice(), &[1.0, 2.0]);
+                    assert_eq!(solve_quadratic::<T>([1.0, 0.0, 1.0]).len(), 0);
+                    assert_eq!(solve_quadratic::<T>([1.0, -2.0, 1.0]).as_slice(), &[1.0]);
+                    assert_eq!(solve_quadratic::<T>([0.0, 0.0, 1.0]).as_slice(), &[0.0]);
+                    assert_eq!(solve_quadratic::<T>([0.0, -2.0, 1.0]).as_slice(), &[0.0, 2.0]);
+                }
+
+                #[test]
+                fn degenerate_leading_coefficient_is_linear_not_inf() {
+                    // cyPolynomial returns inf when a = 0.
+                    assert_eq!(solve_quadratic::<T>([-4.0, 2.0, 0.0]).as_slice(), &[2.0]);
+                    assert_eq!(solve_quadratic::<T>([1.0, 0.0, 0.0]).len(), 0);
+                    assert_eq!(solve_quadratic::<T>([0.0, 0.0, 0.0]).len(), 0);
+                }
+
+                #[test]
+                fn non_finite_input_gives_no_roots() {
+                    for bad in [T::NAN, T::INFINITY, T::NEG_INFINITY] {
+                        assert_eq!(solve_quadratic::<T>([bad, 1.0, 1.0]).len(), 0);
+                        assert_eq!(solve_quadratic::<T>([1.0, bad, 1.0]).len(), 0);
+                        assert_eq!(solve_quadratic::<T>([1.0, 1.0, bad]).len(), 0);
+                    }
+                    assert_eq!(solve_quadratic_in::<T>([2.0, -3.0, 1.0], T::NAN, 3.0).len(), 0);
+                    assert_eq!(solve_quadratic_in::<T>([2.0, -3.0, 1.0], 3.0, 0.0).len(), 0);
+                }
+
+                #[test]
+                fn extreme_magnitudes_do_not_overflow() {
+                    let big = T::MAX / 4.0;
+                    // big (x - 1)(x - 2)
+                    let near = |r: &[T]| r.len() == 2
+                        && (r[0] - 1.0).abs() <= 2.0 * T::EPSILON
+                        && (r[1] - 2.0).abs() <= 4.0 * T::EPSILON;
+                    let r = solve_quadratic::<T>([2.0 * (big / 8.0), -3.0 * (big / 8.0), big / 8.0]);
+                    assert!(near(&r), "{:?}", r);
+                    let tiny = T::MIN_POSITIVE * 64.0;
+                    let r = solve_quadratic::<T>([2.0 * tiny, -3.0 * tiny, tiny]);
+                    assert!(near(&r), "{:?}", r);
+                }
+
+                #[test]
+                fn interval_ends_on_roots_keep_them() {
+                    let c: [T; 3] = [2.0, -3.0, 1.0];
+                    assert_eq!(solve_quadratic_in(c, 1.0, 2.0).as_slice(), &[1.0, 2.0]);
+                    assert_eq!(solve_quadratic_in(c, 1.0, 1.0).as_slice(), &[1.0]);
+                    // Ends one ulp inside the roots: within rounding of a root, so either no
+                    // root or the end itself, never anything else.
+                    let (lo, hi) = ((1.0 as T).next_up(), (2.0 as T).next_down());
+                    for &r in solve_quadratic_in(c, lo, hi).iter() {
+                        assert!(r == lo || r == hi, "{r}");
+                    }
+                    assert_eq!(solve_quadratic_in(c, 1.25, 1.75).len(), 0);
+                    assert_eq!(solve_quadratic_in(c, T::NEG_INFINITY, T::INFINITY).len(), 2);
+                }
+            }
+        )*};
+    }
+    quadratic_tests!(f32, f64);
+}

@@ -1,0 +1,111 @@
+//! [`Roots`]: the fixed-capacity, sorted result of a solver (no heap, `Copy`).
+
+use crate::Real;
+use core::ops::Deref;
+
+/// Up to three distinct real roots in increasing order.
+///
+/// Dereferences to a slice, so `roots.len()`, `roots[0]`, `roots.iter()` and
+/// `roots.first()` work as on `&[T]`.
+///
+/// ```
+/// use nlrt_poly::solve_cubic;
+/// // (x - 1)(x - 2)(x - 3) = x^3 - 6x^2 + 11x - 6, coefficients by ascending power.
+/// let roots = solve_cubic([-6.0f64, 11.0, -6.0, 1.0]);
+/// assert_eq!(roots.len(), 3);
+/// assert!((roots[1] - 2.0).abs() < 1e-15);
+/// ```
+#[derive(Clone, Copy, PartialEq)]
+pub struct Roots<T: Real> {
+    values: [T; 3],
+    len: u8,
+}
+
+impl<T: Real> Roots<T> {
+    /// No roots.
+    #[must_use]
+    #[inline]
+    pub const fn none() -> Self {
+        Self { values: [T::ZERO; 3], len: 0 }
+    }
+
+    /// Builds a root set from up to three values, which are sorted; used by the solvers.
+    ///
+    /// # Panics
+    /// If more than three values are given.
+    #[must_use]
+    pub fn from_slice(values: &[T]) -> Self {
+        let mut roots = Self::none();
+        for &v in values {
+            roots.push(v);
+        }
+        roots.sort();
+        roots
+    }
+
+    /// Appends a root (the solvers push in increasing order).
+    #[inline]
+    pub(crate) fn push(&mut self, value: T) {
+        self.values[self.len as usize] = value;
+        self.len += 1;
+    }
+
+    /// Replaces the last root.
+    #[inline]
+    pub(crate) fn set_last(&mut self, value: T) {
+        self.values[self.len as usize - 1] = value;
+    }
+
+    /// The roots as a slice.
+    #[must_use]
+    #[inline]
+    pub fn as_slice(&self) -> &[T] {
+        &self.values[..self.len as usize]
+    }
+
+    /// Sorts by value (insertion sort of at most three elements).
+    #[inline]
+    pub(crate) fn sort(&mut self) {
+        let n = self.len as usize;
+        for i in 1..n {
+            let mut j = i;
+            while j > 0 && self.values[j - 1] > self.values[j] {
+                self.values.swap(j - 1, j);
+                j -= 1;
+            }
+        }
+    }
+
+    /// Keeps only the roots in `[lo, hi]`.
+    #[must_use]
+    #[inline]
+    pub fn within(self, lo: T, hi: T) -> Self {
+        let mut out = Self::none();
+        for &v in self.as_slice() {
+            if v >= lo && v <= hi {
+                out.push(v);
+            }
+        }
+        out
+    }
+}
+
+impl<T: Real> Default for Roots<T> {
+    fn default() -> Self {
+        Self::none()
+    }
+}
+
+impl<T: Real> Deref for Roots<T> {
+    type Target = [T];
+    #[inline]
+    fn deref(&self) -> &[T] {
+        self.as_slice()
+    }
+}
+
+impl<T: Real> core::fmt::Debug for Roots<T> {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_list().entries(self.as_slice()).finish()
+    }
+}
