@@ -263,9 +263,19 @@ impl ExactPoly {
                 return lo;
             }
             let (v, bound) = self.eval_float(&x, prec);
+            let (dv, _) = d.eval_float(&x, prec);
+            let converged_at = |dist: Float| {
+                let rel = dist / Float::with_val(prec, x.abs_ref());
+                rel.is_zero() || rel.get_exp().is_some_and(|e| e < -(ROOT_BITS as i32) - 8)
+            };
             if Float::with_val(prec, v.abs_ref()) <= bound {
                 if v.is_zero() && bound.is_zero() {
                     return x; // exact zero
+                }
+                // The sign is uncertain, so x is within bound / |p'(x)| of the root (first
+                // order; p' is far from zero for a simple root at this precision).
+                if !dv.is_zero() && converged_at(Float::with_val(prec, &bound / &dv).abs()) {
+                    return x;
                 }
                 if prec >= MAX_PREC {
                     return x;
@@ -282,8 +292,11 @@ impl ExactPoly {
                 hi = x.clone();
             }
             // Newton from x; fall back to bisection when it leaves the bracket.
-            let (dv, _) = d.eval_float(&x, prec);
-            let mut next = Float::with_val(prec, &x - Float::with_val(prec, &v / &dv));
+            let step = Float::with_val(prec, &v / &dv);
+            let mut next = Float::with_val(prec, &x - &step);
+            if next > lo && next < hi && converged_at(step.abs()) {
+                return next; // quadratic convergence: the next error is far smaller still
+            }
             if !(next > lo && next < hi) || !next.is_finite() {
                 next = Float::with_val(prec, &lo + &hi) / 2u32;
             }

@@ -123,31 +123,27 @@ fn cubic_roots<T: Real, const FIRST: bool>(c: [T; 4], lo: T, hi: T) -> Roots<T> 
     }
 
     let mut roots = Roots::none();
-    let mut last_was_point = false;
     for i in 0..n {
         if class[i] == 0 {
-            // A point indistinguishable from a root. Two such points in a row with no sign
-            // change between them belong to one (multiple) root: keep the smaller residual.
-            if last_was_point && class[i - 1] == 0 {
+            // A point indistinguishable from a root. Two such points in a row (no sign change
+            // can lie between them) belong to one multiple root: keep the smaller residual.
+            if i > 0 && class[i - 1] == 0 {
                 if residual[i] < residual[i - 1] {
                     roots.set_last(points[i]);
                 }
             } else {
                 roots.push(points[i]);
-                if FIRST {
-                    return roots;
-                }
             }
-            last_was_point = true;
-        } else {
-            last_was_point = false;
+            continue;
+        }
+        if FIRST && !roots.is_empty() {
+            return roots; // a run of root-like points has ended
         }
         if i + 1 < n
             && class[i] * class[i + 1] < 0
             && let Some(r) = refine(&c, points[i], points[i + 1], class[i])
         {
             roots.push(r);
-            last_was_point = false;
             if FIRST {
                 return roots;
             }
@@ -222,21 +218,15 @@ fn refine<T: Real>(c: &[T; 4], a: T, b: T, sign_a: SignClass) -> Option<T> {
         }
     }
 
-    // Work in m = x / 2^k when the piece reaches huge arguments (exact rescaling).
-    let e = a.abs().max(b.abs()).exponent();
-    let k = if e > safe_argument_exponent::<T>() { e } else { 0 };
-    let cs = if k == 0 { *c } else { rescale_variable(*c, k) };
-    let (mut lo, mut hi) = if k == 0 { (a, b) } else { (a.scale_pow2(-k), b.scale_pow2(-k)) };
-    let unscale = |m: T| if k == 0 { m } else { m.scale_pow2(k) };
-
+    let (mut lo, mut hi) = (a, b);
     let lo_positive = sign_a > 0;
-    let d = [cs[1], cs[2] * T::TWO, cs[3] * T::THREE];
-    let inflection = -cs[2] / d[2];
+    let d = [c[1], c[2] * T::TWO, c[3] * T::THREE];
+    let inflection = -c[2] / d[2];
     // Fourier's condition: Newton started where p * p'' > 0 converges monotonically.
     let start = if inflection > lo && inflection < hi {
-        let f = horner_cubic(&cs, inflection);
+        let f = eval_bounded(c, inflection).0;
         if f == T::ZERO {
-            return Some(unscale(inflection));
+            return Some(inflection);
         }
         if (f > T::ZERO) == lo_positive {
             lo = inflection;
@@ -245,44 +235,58 @@ fn refine<T: Real>(c: &[T; 4], a: T, b: T, sign_a: SignClass) -> Option<T> {
         }
         inflection
     } else {
-        let curvature_positive = (lo >= inflection) == (cs[3] > T::ZERO);
+        let curvature_positive = (lo >= inflection) == (c[3] > T::ZERO);
         if lo_positive == curvature_positive { lo } else { hi }
     };
 
-    let abs_c = [cs[0].abs(), cs[1].abs(), cs[2].abs(), cs[3].abs()];
+    let abs_c = [c[0].abs(), c[1].abs(), c[2].abs(), c[3].abs()];
     let bound_scale = T::from_i32(6) * T::UNIT_ROUNDOFF; // 2 n u with n = 3, as in `horner_with_bound`
+    let safe = T::pow2(safe_argument_exponent::<T>());
     let mut x = start;
     let mut step_before_last = T::INFINITY;
     let mut last_step = T::INFINITY;
+    let mut slow_steps = 0u32;
     for _ in 0..max_iterations::<T>() {
-        let ax = x.abs();
-        let f = cs[3].mul_add(x, cs[2]).mul_add(x, cs[1]).mul_add(x, cs[0]);
-        let df = d[2].mul_add(x, d[1]).mul_add(x, d[0]);
-        let magnitude = abs_c[3].mul_add(ax, abs_c[2]).mul_add(ax, abs_c[1]).mul_add(ax, abs_c[0]);
+        let Step { f, df, magnitude, curvature_lo, curvature_hi, step } = if x.abs() <= safe {
+            newton_step(c, &d, &abs_c, x, lo, hi)
+        } else {
+            // Huge argument: the same step on the polynomial rescaled to m = x / 2^k, exact.
+            let k = x.exponent();
+            let cs = rescale_variable(*c, k);
+            let ds = [cs[1], cs[2] * T::TWO, cs[3] * T::THREE];
+            let abs_cs = [cs[0].abs(), cs[1].abs(), cs[2].abs(), cs[3].abs()];
+            let s = newton_step(&cs, &ds, &abs_cs, x.scale_pow2(-k), lo.scale_pow2(-k), hi.scale_pow2(-k));
+            Step { step: s.step.scale_pow2(k), ..s }
+        };
         if f == T::ZERO {
-            return Some(unscale(x));
+            return Some(x);
         }
         if (f > T::ZERO) == lo_positive {
             lo = x;
         } else {
             hi = x;
         }
-        let step = f / df;
         let newton = x - step;
-        let accept = newton > lo && newton < hi && step.abs() * T::TWO <= step_before_last.abs();
+        // Far from a root whose magnitude is much smaller than x, p behaves like a power of x
+        // and Newton only shrinks x by a constant factor per step (many dozens of steps across
+        // a bracket spanning many binades). Two such slow steps in a row trigger a bisection,
+        // which halves the bracket in representation order.
+        let slow = step.abs() * T::from_i32(4) > newton.abs();
+        slow_steps = if slow { slow_steps + 1 } else { 0 };
+        let accept = newton > lo
+            && newton < hi
+            && step.abs() * T::TWO <= step_before_last.abs()
+            && slow_steps < 2;
         step_before_last = last_step;
         let next = if accept {
             last_step = step;
-            // Quadratic convergence: the error after this step is about |p''| step^2 / (2|p'|).
-            // Below half an ulp of the result, no further step can improve it.
-            // p'' is linear, so its largest magnitude over the bracket (which holds the root
-            // and the step) is at an end.
-            let d2 = d[2] * T::TWO;
-            let curvature = d2.mul_add(lo, d[1]).abs().max(d2.mul_add(hi, d[1]).abs());
-            if curvature * step * step <= (df * newton).abs() * T::EPSILON
-                || step.abs() <= newton.abs() * T::EPSILON
-            {
-                return Some(unscale(newton));
+            // Quadratic convergence: the error after this step is about |p''| step^2 / (2|p'|),
+            // with |p''| taken at its largest over the bracket (it is linear, so at an end).
+            // Below half an ulp of the result, no further step can improve it. In rescaled
+            // coordinates both sides scale alike, so the test is the same.
+            let curvature = curvature_lo.abs().max(curvature_hi.abs());
+            if curvature * step * step <= (df * newton).abs() * T::EPSILON || step.abs() <= newton.abs() * T::EPSILON {
+                return Some(newton);
             }
             newton
         } else {
@@ -290,22 +294,46 @@ fn refine<T: Real>(c: &[T; 4], a: T, b: T, sign_a: SignClass) -> Option<T> {
             // or clustered root, where Newton only converges linearly through noise), x is as
             // good as the conditioning allows: stop. Otherwise bisect.
             if f.abs() <= bound_scale * magnitude {
-                return Some(unscale(x));
+                return Some(x);
             }
             last_step = hi - lo;
+            slow_steps = 0;
             midpoint(lo, hi)
         };
         if next == x || next == lo || next == hi {
-            return Some(unscale(x)); // the bracket is down to adjacent floats
+            return Some(x); // the bracket is down to adjacent floats
         }
         x = next;
     }
-    Some(unscale(x))
+    Some(x)
+}
+
+/// One Newton evaluation: value, derivative, the magnitude sum for the error bound, `p''` at
+/// both bracket ends, and the Newton step `p / p'`.
+struct Step<T> {
+    f: T,
+    df: T,
+    magnitude: T,
+    curvature_lo: T,
+    curvature_hi: T,
+    step: T,
 }
 
 #[inline(always)]
-fn horner_cubic<T: Real>(c: &[T; 4], x: T) -> T {
-    c[3].mul_add(x, c[2]).mul_add(x, c[1]).mul_add(x, c[0])
+fn newton_step<T: Real>(c: &[T; 4], d: &[T; 3], abs_c: &[T; 4], x: T, lo: T, hi: T) -> Step<T> {
+    let ax = x.abs();
+    let f = c[3].mul_add(x, c[2]).mul_add(x, c[1]).mul_add(x, c[0]);
+    let df = d[2].mul_add(x, d[1]).mul_add(x, d[0]);
+    let magnitude = abs_c[3].mul_add(ax, abs_c[2]).mul_add(ax, abs_c[1]).mul_add(ax, abs_c[0]);
+    let d2 = d[2] * T::TWO;
+    Step {
+        f,
+        df,
+        magnitude,
+        curvature_lo: d2.mul_add(lo, d[1]),
+        curvature_hi: d2.mul_add(hi, d[1]),
+        step: f / df,
+    }
 }
 
 /// Bisection point: the arithmetic mean within a factor of 4, otherwise the middle in
