@@ -47,7 +47,10 @@ impl ExactPoly {
     /// From floating-point coefficients (ascending powers). `None` if any is NaN or infinite.
     #[must_use]
     pub fn from_f64s(c: &[f64]) -> Option<Self> {
-        let coeffs = c.iter().map(|&x| Rational::from_f64(x)).collect::<Option<Vec<_>>>()?;
+        let coeffs = c
+            .iter()
+            .map(|&x| Rational::from_f64(x))
+            .collect::<Option<Vec<_>>>()?;
         Some(Self::from_rationals(coeffs))
     }
 
@@ -142,7 +145,10 @@ impl ExactPoly {
             quot[i] = q;
         }
         rem.truncate(dd);
-        (ExactPoly::from_rationals(quot), ExactPoly::from_rationals(rem))
+        (
+            ExactPoly::from_rationals(quot),
+            ExactPoly::from_rationals(rem),
+        )
     }
 
     fn gcd(&self, other: &ExactPoly) -> ExactPoly {
@@ -161,7 +167,9 @@ impl ExactPoly {
     /// For degree above 3.
     #[must_use]
     pub fn real_roots(&self) -> Vec<RealRoot> {
-        let Some(deg) = self.degree() else { return vec![] };
+        let Some(deg) = self.degree() else {
+            return vec![];
+        };
         assert!(deg <= 3, "the oracle handles degree <= 3");
         let mut roots = Vec::new();
         let mut rest = self.clone();
@@ -169,16 +177,23 @@ impl ExactPoly {
         let g = self.gcd(&self.derivative());
         if let Some(gd @ 1..) = g.degree() {
             // g = (x - r)^gd up to a constant
-            let r = -(g.coeffs[gd - 1].clone()) / (g.coeffs[gd].clone() * Rational::from(gd as u32));
+            let r =
+                -(g.coeffs[gd - 1].clone()) / (g.coeffs[gd].clone() * Rational::from(gd as u32));
             let mult = gd as u32 + 1;
             for _ in 0..mult {
                 let lin = ExactPoly::from_rationals(vec![Rational::from(-&r), Rational::from(1)]);
                 rest = rest.div_rem(&lin).0;
             }
-            roots.push(RealRoot { value: Float::with_val(START_PREC, &r), multiplicity: mult });
+            roots.push(RealRoot {
+                value: Float::with_val(START_PREC, &r),
+                multiplicity: mult,
+            });
         }
         for value in rest.squarefree_roots() {
-            roots.push(RealRoot { value, multiplicity: 1 });
+            roots.push(RealRoot {
+                value,
+                multiplicity: 1,
+            });
         }
         roots.sort_by(|a, b| a.value.partial_cmp(&b.value).unwrap_or(Ordering::Equal));
         roots
@@ -212,7 +227,8 @@ impl ExactPoly {
         let hi_end = Float::with_val(START_PREC, &bound);
         let d = self.derivative();
         // Discriminant of p' = d0 + d1 x + d2 x^2.
-        let dd = Rational::from(d.coeffs[1].clone().pow(2)) - Rational::from(4) * &d.coeffs[2] * &d.coeffs[0];
+        let dd = Rational::from(d.coeffs[1].clone().pow(2))
+            - Rational::from(4) * &d.coeffs[2] * &d.coeffs[0];
         if dd.cmp0() != Ordering::Greater {
             // Monotonic: one real root. Sign at -bound is -sign(lead).
             return vec![self.refine(lo_end, hi_end, !lead_positive)];
@@ -255,8 +271,13 @@ impl ExactPoly {
         loop {
             // Converged: the bracket is below 2^-(ROOT_BITS + 8) relative to the root.
             let width = Float::with_val(prec, &hi - &lo);
-            let scale = Float::with_val(prec, lo.abs_ref()).max(&Float::with_val(prec, hi.abs_ref()));
-            if width.is_zero() || (!scale.is_zero() && (width.clone() / &scale).get_exp().unwrap_or(i32::MIN) < -(ROOT_BITS as i32) - 8) {
+            let scale =
+                Float::with_val(prec, lo.abs_ref()).max(&Float::with_val(prec, hi.abs_ref()));
+            if width.is_zero()
+                || (!scale.is_zero()
+                    && (width.clone() / &scale).get_exp().unwrap_or(i32::MIN)
+                        < -(ROOT_BITS as i32) - 8)
+            {
                 return Float::with_val(prec, &lo + &hi) / 2u32;
             }
             if scale.is_zero() {
@@ -329,13 +350,20 @@ fn quadratic_roots(c0: &Rational, c1: &Rational, c2: &Rational) -> Vec<Float> {
     let disc = Rational::from(c1.clone().pow(2)) - Rational::from(4) * c2 * c0;
     match disc.cmp0() {
         Ordering::Less => vec![],
-        Ordering::Equal => vec![Float::with_val(START_PREC, -(c1.clone()) / (Rational::from(2) * c2))],
+        Ordering::Equal => vec![Float::with_val(
+            START_PREC,
+            -(c1.clone()) / (Rational::from(2) * c2),
+        )],
         Ordering::Greater => {
             let prec = START_PREC + 64;
             let s = Float::with_val(prec, &disc).sqrt();
             let b = Float::with_val(prec, c1);
             // q = -(b + sign(b) sqrt(D)) / 2: no cancellation.
-            let q = if b.cmp0() == Some(Ordering::Less) { (s - b) / 2u32 } else { -(s + b) / 2u32 };
+            let q = if b.cmp0() == Some(Ordering::Less) {
+                (s - b) / 2u32
+            } else {
+                -(s + b) / 2u32
+            };
             let r1 = Float::with_val(prec, &q / &Float::with_val(prec, c2));
             let r2 = Float::with_val(prec, &Float::with_val(prec, c0) / &q);
             let mut v = vec![r1, r2];
@@ -350,12 +378,20 @@ mod tests {
     use super::*;
 
     fn roots(c: &[f64]) -> Vec<(f64, u32)> {
-        ExactPoly::from_f64s(c).unwrap().real_roots().iter().map(|r| (r.to_f64(), r.multiplicity)).collect()
+        ExactPoly::from_f64s(c)
+            .unwrap()
+            .real_roots()
+            .iter()
+            .map(|r| (r.to_f64(), r.multiplicity))
+            .collect()
     }
 
     #[test]
     fn simple_cubic() {
-        assert_eq!(roots(&[-6.0, 11.0, -6.0, 1.0]), vec![(1.0, 1), (2.0, 1), (3.0, 1)]);
+        assert_eq!(
+            roots(&[-6.0, 11.0, -6.0, 1.0]),
+            vec![(1.0, 1), (2.0, 1), (3.0, 1)]
+        );
     }
 
     #[test]
@@ -363,7 +399,10 @@ mod tests {
         // (x - 0.5)^2 (x + 3) = x^3 + 2x^2 - 2.75x + 0.75
         assert_eq!(roots(&[0.75, -2.75, 2.0, 1.0]), vec![(-3.0, 1), (0.5, 2)]);
         // (x - 0.25)^3
-        assert_eq!(roots(&[-1.0 / 64.0, 3.0 / 16.0, -0.75, 1.0]), vec![(0.25, 3)]);
+        assert_eq!(
+            roots(&[-1.0 / 64.0, 3.0 / 16.0, -0.75, 1.0]),
+            vec![(0.25, 3)]
+        );
         // x^2 (x - 1)
         assert_eq!(roots(&[0.0, 0.0, -1.0, 1.0]), vec![(0.0, 2), (1.0, 1)]);
         assert_eq!(roots(&[0.0, 0.0, 90.0]), vec![(0.0, 2)]);
@@ -387,7 +426,11 @@ mod tests {
     fn near_double_root_is_resolved_to_200_bits() {
         // (x - 1)(x - (1 + 2^-50))(x - 3): two roots 2^-50 apart.
         let e = 2f64.powi(-50);
-        let (a, b, c) = (Rational::from(1), Rational::from(1) + Rational::from_f64(e).unwrap(), Rational::from(3));
+        let (a, b, c) = (
+            Rational::from(1),
+            Rational::from(1) + Rational::from_f64(e).unwrap(),
+            Rational::from(3),
+        );
         let coeffs = vec![
             Rational::from(-(a.clone() * &b * &c)),
             Rational::from(&a * &b) + Rational::from(&a * &c) + Rational::from(&b * &c),

@@ -28,10 +28,15 @@ fn round<T: Real>(r: &Rational) -> T {
 /// `scale * prod (x - r_i)` expanded exactly, rounded to `T` once per coefficient.
 #[must_use]
 pub fn cubic_from_roots<T: Real>(roots: [f64; 3], scale: f64) -> [T; 4] {
-    let r: Vec<Rational> = roots.iter().map(|&x| Rational::from_f64(x).expect("finite root")).collect();
+    let r: Vec<Rational> = roots
+        .iter()
+        .map(|&x| Rational::from_f64(x).expect("finite root"))
+        .collect();
     let s = Rational::from_f64(scale).expect("finite scale");
     let e1 = Rational::from(&r[0] + &r[1]) + &r[2];
-    let e2 = Rational::from(&r[0] * &r[1]) + Rational::from(&r[0] * &r[2]) + Rational::from(&r[1] * &r[2]);
+    let e2 = Rational::from(&r[0] * &r[1])
+        + Rational::from(&r[0] * &r[2])
+        + Rational::from(&r[1] * &r[2]);
     let e3 = Rational::from(&r[0] * &r[1]) * &r[2];
     [
         round(&(-e3 * &s)),
@@ -59,7 +64,12 @@ pub fn cubic_with_complex_pair<T: Real>(a: f64, re: f64, im: f64) -> [T; 4] {
 }
 
 fn case<T: Real>(name: &str, coeffs: [T; 4], lo: f64, hi: f64) -> Case<T> {
-    Case { name: name.to_string(), coeffs, lo: T::from_f64(lo), hi: T::from_f64(hi) }
+    Case {
+        name: name.to_string(),
+        coeffs,
+        lo: T::from_f64(lo),
+        hi: T::from_f64(hi),
+    }
 }
 
 /// The named hard families of the foundation issue, for the type `T`. Each is solved on the
@@ -69,38 +79,192 @@ pub fn hard_cubics<T: Real>() -> Vec<Case<T>> {
     let inf = f64::INFINITY;
     let is_f32 = T::MANTISSA_DIGITS == 24;
     // Extreme magnitudes: the largest coefficient near 1e238 (f64) or 1e37 (f32), and tiny.
-    let (huge, tiny) = if is_f32 { (1e36, 1e-36) } else { (1e236, 1e-300) };
+    let (huge, tiny) = if is_f32 {
+        (1e36, 1e-36)
+    } else {
+        (1e236, 1e-300)
+    };
     let mut v = vec![
-        case("spread/1,1e7,1e14", cubic_from_roots([1.0, 1e7, 1e14], 1.0), -inf, inf),
-        case("spread/1,-1,-1e24", cubic_from_roots([1.0, -1.0, -1e24], 1.0), -inf, inf),
-        case("spread/1e-7,1,1e7", cubic_from_roots([1e-7, 1.0, 1e7], 1.0), -inf, inf),
-        case("magnitude/huge", cubic_from_roots([1.0, 2.0, 3.0], huge), -inf, inf),
-        case("magnitude/huge-spread", cubic_from_roots([-1.0, 1e3, 1e6], huge / 1e18), -inf, inf),
-        case("magnitude/tiny", cubic_from_roots([1.0, 2.0, 3.0], tiny), -inf, inf),
-        case("magnitude/tiny-roots", cubic_from_roots([1e-30, 2e-30, -3e-30], 1.0), -inf, inf),
-        case("cluster/1,1+1e-6,1+2e-6", cubic_from_roots([1.0, 1.0 + 1e-6, 1.0 + 2e-6], 1.0), -inf, inf),
-        case("cluster/unit", cubic_from_roots([1.0, 1.0 + 1e-6, 1.0 + 2e-6], 1.0), 0.0, 2.0),
-        case("double/large-scale", cubic_from_roots([1e6, 1e6, -1.0], 1.0), -inf, inf),
-        case("double/large-scale-2", cubic_from_roots([1e10, 1e10, 1.0], 1.0), -inf, inf),
-        case("double/unit", cubic_from_roots([0.5, 0.5, 2.0], 1.0), 0.0, 1.0),
-        case("double/at-end", cubic_from_roots([0.0, 0.0, 0.5], 1.0), 0.0, 1.0),
-        case("triple/quarter", cubic_from_roots([0.25, 0.25, 0.25], 1.0), -inf, inf),
-        case("triple/minus-one", cubic_from_roots([-1.0, -1.0, -1.0], 1.0), -2.0, 0.0),
-        case("complex-pair/1e5+-i", cubic_with_complex_pair(1e5, 1e5, 1.0), -inf, inf),
-        case("complex-pair/1,1+-1e7i", cubic_with_complex_pair(1.0, 1.0, 1e7), -inf, inf),
-        case("complex-pair/near", cubic_with_complex_pair(0.5, 0.5 + 1e-3, 1e-4), 0.0, 1.0),
-        case("kahan", [-587_898_164.0, 18_311_811.0, -190_125.0, 658.0].map(T::from_f64), -inf, inf),
-        case("tiny-leading/1e-20", [2.0, -3.0, 1.0, 1e-20].map(T::from_f64), -inf, inf),
-        case("tiny-leading/1e-10", [2.0, -3.0, 1.0, 1e-10].map(T::from_f64), -inf, inf),
-        case("tiny-leading/unit", [0.25, -1.25, 1.0, 1e-20].map(T::from_f64), 0.0, 1.0),
-        case("tiny-root/1e-18", cubic_from_roots([1e-18, 1.0, 2.0], 1.0), -inf, inf),
-        case("tiny-root/+-1e-18", cubic_from_roots([-1e-18, 1e-18, 1.0], 1.0), -inf, inf),
-        case("cy/90x^2-on-unit", [0.0, 0.0, 90.0, 0.0].map(T::from_f64), 0.0, 1.0),
-        case("cy/90x^2(x-1)", [0.0, 0.0, -90.0, 90.0].map(T::from_f64), 0.0, 1.0),
-        case("cy/linear", [-4.0, 2.0, 0.0, 0.0].map(T::from_f64), -inf, inf),
-        case("cy/outward-search", cubic_from_roots([-3e5, 1e-3, 7e8], 1.0), -inf, inf),
-        case("unit/three", cubic_from_roots([0.1, 0.5, 0.9], 1.0), 0.0, 1.0),
-        case("unit/ends", cubic_from_roots([0.0, 0.5, 1.0], 1.0), 0.0, 1.0),
+        case(
+            "spread/1,1e7,1e14",
+            cubic_from_roots([1.0, 1e7, 1e14], 1.0),
+            -inf,
+            inf,
+        ),
+        case(
+            "spread/1,-1,-1e24",
+            cubic_from_roots([1.0, -1.0, -1e24], 1.0),
+            -inf,
+            inf,
+        ),
+        case(
+            "spread/1e-7,1,1e7",
+            cubic_from_roots([1e-7, 1.0, 1e7], 1.0),
+            -inf,
+            inf,
+        ),
+        case(
+            "magnitude/huge",
+            cubic_from_roots([1.0, 2.0, 3.0], huge),
+            -inf,
+            inf,
+        ),
+        case(
+            "magnitude/huge-spread",
+            cubic_from_roots([-1.0, 1e3, 1e6], huge / 1e18),
+            -inf,
+            inf,
+        ),
+        case(
+            "magnitude/tiny",
+            cubic_from_roots([1.0, 2.0, 3.0], tiny),
+            -inf,
+            inf,
+        ),
+        case(
+            "magnitude/tiny-roots",
+            cubic_from_roots([1e-30, 2e-30, -3e-30], 1.0),
+            -inf,
+            inf,
+        ),
+        case(
+            "cluster/1,1+1e-6,1+2e-6",
+            cubic_from_roots([1.0, 1.0 + 1e-6, 1.0 + 2e-6], 1.0),
+            -inf,
+            inf,
+        ),
+        case(
+            "cluster/unit",
+            cubic_from_roots([1.0, 1.0 + 1e-6, 1.0 + 2e-6], 1.0),
+            0.0,
+            2.0,
+        ),
+        case(
+            "double/large-scale",
+            cubic_from_roots([1e6, 1e6, -1.0], 1.0),
+            -inf,
+            inf,
+        ),
+        case(
+            "double/large-scale-2",
+            cubic_from_roots([1e10, 1e10, 1.0], 1.0),
+            -inf,
+            inf,
+        ),
+        case(
+            "double/unit",
+            cubic_from_roots([0.5, 0.5, 2.0], 1.0),
+            0.0,
+            1.0,
+        ),
+        case(
+            "double/at-end",
+            cubic_from_roots([0.0, 0.0, 0.5], 1.0),
+            0.0,
+            1.0,
+        ),
+        case(
+            "triple/quarter",
+            cubic_from_roots([0.25, 0.25, 0.25], 1.0),
+            -inf,
+            inf,
+        ),
+        case(
+            "triple/minus-one",
+            cubic_from_roots([-1.0, -1.0, -1.0], 1.0),
+            -2.0,
+            0.0,
+        ),
+        case(
+            "complex-pair/1e5+-i",
+            cubic_with_complex_pair(1e5, 1e5, 1.0),
+            -inf,
+            inf,
+        ),
+        case(
+            "complex-pair/1,1+-1e7i",
+            cubic_with_complex_pair(1.0, 1.0, 1e7),
+            -inf,
+            inf,
+        ),
+        case(
+            "complex-pair/near",
+            cubic_with_complex_pair(0.5, 0.5 + 1e-3, 1e-4),
+            0.0,
+            1.0,
+        ),
+        case(
+            "kahan",
+            [-587_898_164.0, 18_311_811.0, -190_125.0, 658.0].map(T::from_f64),
+            -inf,
+            inf,
+        ),
+        case(
+            "tiny-leading/1e-20",
+            [2.0, -3.0, 1.0, 1e-20].map(T::from_f64),
+            -inf,
+            inf,
+        ),
+        case(
+            "tiny-leading/1e-10",
+            [2.0, -3.0, 1.0, 1e-10].map(T::from_f64),
+            -inf,
+            inf,
+        ),
+        case(
+            "tiny-leading/unit",
+            [0.25, -1.25, 1.0, 1e-20].map(T::from_f64),
+            0.0,
+            1.0,
+        ),
+        case(
+            "tiny-root/1e-18",
+            cubic_from_roots([1e-18, 1.0, 2.0], 1.0),
+            -inf,
+            inf,
+        ),
+        case(
+            "tiny-root/+-1e-18",
+            cubic_from_roots([-1e-18, 1e-18, 1.0], 1.0),
+            -inf,
+            inf,
+        ),
+        case(
+            "cy/90x^2-on-unit",
+            [0.0, 0.0, 90.0, 0.0].map(T::from_f64),
+            0.0,
+            1.0,
+        ),
+        case(
+            "cy/90x^2(x-1)",
+            [0.0, 0.0, -90.0, 90.0].map(T::from_f64),
+            0.0,
+            1.0,
+        ),
+        case(
+            "cy/linear",
+            [-4.0, 2.0, 0.0, 0.0].map(T::from_f64),
+            -inf,
+            inf,
+        ),
+        case(
+            "cy/outward-search",
+            cubic_from_roots([-3e5, 1e-3, 7e8], 1.0),
+            -inf,
+            inf,
+        ),
+        case(
+            "unit/three",
+            cubic_from_roots([0.1, 0.5, 0.9], 1.0),
+            0.0,
+            1.0,
+        ),
+        case(
+            "unit/ends",
+            cubic_from_roots([0.0, 0.5, 1.0], 1.0),
+            0.0,
+            1.0,
+        ),
     ];
     // Roots exactly on, just inside and just outside the ends of the interval.
     let r = cubic_from_roots::<T>([0.25, 0.5, 0.75], 1.0);
@@ -110,7 +274,12 @@ pub fn hard_cubics<T: Real>() -> Vec<Case<T>> {
         ("inside", a.next_up(), b.next_down()),
         ("outside", a.next_down(), b.next_up()),
     ] {
-        v.push(Case { name: format!("ends/{label}"), coeffs: r, lo, hi });
+        v.push(Case {
+            name: format!("ends/{label}"),
+            coeffs: r,
+            lo,
+            hi,
+        });
     }
     v
 }
@@ -159,7 +328,11 @@ pub enum RandomFamily {
 
 impl RandomFamily {
     /// All families.
-    pub const ALL: [RandomFamily; 3] = [Self::ThreeRootsInUnit, Self::LogUniformCoefficients, Self::Clustered];
+    pub const ALL: [RandomFamily; 3] = [
+        Self::ThreeRootsInUnit,
+        Self::LogUniformCoefficients,
+        Self::Clustered,
+    ];
 
     /// Short name for tables.
     #[must_use]
@@ -177,7 +350,12 @@ impl RandomFamily {
         match self {
             Self::ThreeRootsInUnit => {
                 let roots = [rng.unit(), rng.unit(), rng.unit()];
-                Case { name: self.name().into(), coeffs: cubic_from_roots(roots, 1.0), lo: T::ZERO, hi: T::ONE }
+                Case {
+                    name: self.name().into(),
+                    coeffs: cubic_from_roots(roots, 1.0),
+                    lo: T::ZERO,
+                    hi: T::ONE,
+                }
             }
             Self::LogUniformCoefficients => {
                 let mut c = [T::ZERO; 4];
@@ -186,14 +364,29 @@ impl RandomFamily {
                     let sign = if rng.next_u64() & 1 == 0 { 1.0 } else { -1.0 };
                     *ci = T::from_f64(sign * mag);
                 }
-                Case { name: self.name().into(), coeffs: c, lo: T::from_f64(-inf), hi: T::from_f64(inf) }
+                Case {
+                    name: self.name().into(),
+                    coeffs: c,
+                    lo: T::from_f64(-inf),
+                    hi: T::from_f64(inf),
+                }
             }
             Self::Clustered => {
-                let scale = rng.range(-20.0, 20.0).exp2() * if rng.next_u64() & 1 == 0 { 1.0 } else { -1.0 };
+                let scale = rng.range(-20.0, 20.0).exp2()
+                    * if rng.next_u64() & 1 == 0 { 1.0 } else { -1.0 };
                 let j = rng.range(4.0, 40.0).floor();
                 let gap = (-j).exp2();
-                let roots = [scale, scale * (1.0 + gap), scale * (1.0 + 2.0 * gap * rng.unit())];
-                Case { name: self.name().into(), coeffs: cubic_from_roots(roots, 1.0), lo: T::from_f64(-inf), hi: T::from_f64(inf) }
+                let roots = [
+                    scale,
+                    scale * (1.0 + gap),
+                    scale * (1.0 + 2.0 * gap * rng.unit()),
+                ];
+                Case {
+                    name: self.name().into(),
+                    coeffs: cubic_from_roots(roots, 1.0),
+                    lo: T::from_f64(-inf),
+                    hi: T::from_f64(inf),
+                }
             }
         }
     }

@@ -27,7 +27,10 @@ pub struct Tolerance {
 impl Tolerance {
     /// The tolerance the project's solvers are held to: 4 ulps, or 2x the attainable radius
     /// for ill-conditioned roots.
-    pub const SOLVER: Tolerance = Tolerance { ulps: 4.0, radius_factor: 2.0 };
+    pub const SOLVER: Tolerance = Tolerance {
+        ulps: 4.0,
+        radius_factor: 2.0,
+    };
 }
 
 /// What a solver got right and wrong on one polynomial.
@@ -84,8 +87,17 @@ impl Truth {
         let degree = poly.degree().unwrap_or(0).max(1) as u32;
         // 2 n u, the noise factor of `horner_with_bound`.
         let noise_scale = Float::with_val(PREC, 2 * degree) >> T::MANTISSA_DIGITS;
-        let mut truth = Self { poly, roots, radii: vec![], noise_scale };
-        truth.radii = truth.roots.iter().map(|r| truth.attainable_radius::<T>(&r.value)).collect();
+        let mut truth = Self {
+            poly,
+            roots,
+            radii: vec![],
+            noise_scale,
+        };
+        truth.radii = truth
+            .roots
+            .iter()
+            .map(|r| truth.attainable_radius::<T>(&r.value))
+            .collect();
         Some(truth)
     }
 
@@ -139,7 +151,10 @@ impl Truth {
             })
             .collect();
         let inside = |r: &Float| *r >= lo_f && *r <= hi_f;
-        let mut v = Verdict { true_roots: self.roots.iter().filter(|r| inside(&r.value)).count(), ..Verdict::default() };
+        let mut v = Verdict {
+            true_roots: self.roots.iter().filter(|r| inside(&r.value)).count(),
+            ..Verdict::default()
+        };
         let mut found = vec![false; self.roots.len()];
         for &x in computed {
             let xf = Float::with_val(PREC, x.to_f64());
@@ -162,7 +177,8 @@ impl Truth {
                 .min_by(|a, b| a.2.partial_cmp(&b.2).unwrap_or(Ordering::Equal));
             match best {
                 Some((i, err, ratio)) if ratio <= 1 => {
-                    v.errors_ulps.push((err / ulp::<T>(&self.roots[i].value)).to_f64());
+                    v.errors_ulps
+                        .push((err / ulp::<T>(&self.roots[i].value)).to_f64());
                     v.error_over_tolerance.push(ratio.to_f64());
                 }
                 _ => {
@@ -186,7 +202,9 @@ impl Truth {
 /// Exponent of one ulp of the type `T` at `r` (subnormal spacing below the normal range).
 fn ulp_exponent<T: Real>(r: &Float) -> i32 {
     let p = T::MANTISSA_DIGITS as i32;
-    let e = r.get_exp().map_or(T::MIN_EXPONENT, |e| (e - 1).max(T::MIN_EXPONENT));
+    let e = r
+        .get_exp()
+        .map_or(T::MIN_EXPONENT, |e| (e - 1).max(T::MIN_EXPONENT));
     e - (p - 1)
 }
 
@@ -208,6 +226,9 @@ pub fn ulp<T: Real>(r: &Float) -> Float {
 pub fn judge<T: Real>(coeffs: &[T], computed: &[T], lo: T, hi: T, tol: Tolerance) -> Verdict {
     match Truth::new(coeffs) {
         Some(t) => t.judge(computed, lo, hi, tol),
-        None => Verdict { spurious: computed.len(), ..Verdict::default() },
+        None => Verdict {
+            spurious: computed.len(),
+            ..Verdict::default()
+        },
     }
 }

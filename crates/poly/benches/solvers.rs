@@ -1,1 +1,108 @@
-fn main() {}
+//! Solver speed, side by side in one run: nlrt-poly, the closed-form baseline and the `roots`
+//! crate, for f32 and f64. Accuracy of the same methods is measured by `nlrt solvers`.
+//!
+//! `cargo bench -p nlrt-poly --bench solvers`
+
+use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
+use nlrt_oracle::families::{RandomFamily, SplitMix64};
+use nlrt_poly::baseline::solve_cubic_closed_form_in;
+use nlrt_poly::{Real, first_cubic_root_in, solve_cubic_in, solve_quadratic};
+use std::hint::black_box;
+
+const SAMPLES: usize = 100_000;
+
+fn unit_cubics<T: Real>() -> Vec<[T; 4]> {
+    let mut rng = SplitMix64::new(0x5eed);
+    (0..SAMPLES)
+        .map(|_| RandomFamily::ThreeRootsInUnit.sample::<T>(&mut rng).coeffs)
+        .collect()
+}
+
+fn roots_crate<T: Real + roots::FloatType>(c: [T; 4], lo: T, hi: T) -> usize {
+    roots::find_roots_cubic(c[3], c[2], c[1], c[0])
+        .as_ref()
+        .iter()
+        .filter(|&&x| x >= lo && x <= hi)
+        .count()
+}
+
+fn bench_type<T: Real + roots::FloatType>(crit: &mut Criterion) {
+    let cubics = unit_cubics::<T>();
+    let (lo, hi) = (T::ZERO, T::ONE);
+
+    let mut g = crit.benchmark_group(format!("cubic_all_roots_in_unit/{}", T::NAME));
+    g.throughput(Throughput::Elements(SAMPLES as u64));
+    g.bench_function(BenchmarkId::from_parameter("nlrt"), |b| {
+        b.iter(|| {
+            cubics
+                .iter()
+                .map(|&c| solve_cubic_in(black_box(c), lo, hi).len())
+                .sum::<usize>()
+        })
+    });
+    g.bench_function(BenchmarkId::from_parameter("closed_form"), |b| {
+        b.iter(|| {
+            cubics
+                .iter()
+                .map(|&c| solve_cubic_closed_form_in(black_box(c), lo, hi).len())
+                .sum::<usize>()
+        })
+    });
+    g.bench_function(BenchmarkId::from_parameter("roots_crate"), |b| {
+        b.iter(|| {
+            cubics
+                .iter()
+                .map(|&c| roots_crate(black_box(c), lo, hi))
+                .sum::<usize>()
+        })
+    });
+    g.finish();
+
+    let mut g = crit.benchmark_group(format!("cubic_first_root_in_unit/{}", T::NAME));
+    g.throughput(Throughput::Elements(SAMPLES as u64));
+    g.bench_function(BenchmarkId::from_parameter("nlrt"), |b| {
+        b.iter(|| {
+            cubics
+                .iter()
+                .filter_map(|&c| first_cubic_root_in(black_box(c), lo, hi))
+                .count()
+        })
+    });
+    g.finish();
+
+    let quadratics: Vec<[T; 3]> = cubics
+        .iter()
+        .map(|c| [c[1], c[2] * T::TWO, c[3] * T::THREE])
+        .collect();
+    let mut g = crit.benchmark_group(format!("quadratic/{}", T::NAME));
+    g.throughput(Throughput::Elements(SAMPLES as u64));
+    g.bench_function(BenchmarkId::from_parameter("nlrt"), |b| {
+        b.iter(|| {
+            quadratics
+                .iter()
+                .map(|&c| solve_quadratic(black_box(c)).len())
+                .sum::<usize>()
+        })
+    });
+    g.bench_function(BenchmarkId::from_parameter("roots_crate"), |b| {
+        b.iter(|| {
+            quadratics
+                .iter()
+                .map(|&c| roots::find_roots_quadratic(c[2], c[1], c[0]).as_ref().len())
+                .sum::<usize>()
+        })
+    });
+    g.finish();
+}
+
+fn benches(c: &mut Criterion) {
+    bench_type::<f64>(c);
+    bench_type::<f32>(c);
+}
+
+criterion_group! {
+    name = solvers;
+    config = Criterion::default().sample_size(20).warm_up_time(std::time::Duration::from_millis(500)).measurement_time(std::time::Duration::from_secs(2));
+    targets = benches
+}
+criterion_main!(solvers);

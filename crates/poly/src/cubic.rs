@@ -74,54 +74,141 @@ pub fn first_cubic_root_in<T: Real>(c: [T; 4], lo: T, hi: T) -> Option<T> {
 /// Sign class of `p` at a point: +1, -1, or 0 when `|p|` is within its rounding-error bound.
 type SignClass = i8;
 
+/// A normalized cubic with what every evaluation needs, computed once per solve.
+struct Cubic<T> {
+    /// Coefficients, ascending.
+    c: [T; 4],
+    /// Derivative coefficients, ascending.
+    d: [T; 3],
+    /// `|c_i|`, for the rounding-error bound.
+    abs_c: [T; 4],
+}
+
+impl<T: Real> Cubic<T> {
+    #[inline(always)]
+    fn new(c: [T; 4]) -> Self {
+        Self {
+            c,
+            d: [c[1], c[2] * T::TWO, c[3] * T::THREE],
+            abs_c: [c[0].abs(), c[1].abs(), c[2].abs(), c[3].abs()],
+        }
+    }
+
+    #[inline(always)]
+    fn value(&self, x: T) -> T {
+        let c = &self.c;
+        c[3].mul_add(x, c[2]).mul_add(x, c[1]).mul_add(x, c[0])
+    }
+
+    #[inline(always)]
+    fn slope(&self, x: T) -> T {
+        let d = &self.d;
+        d[2].mul_add(x, d[1]).mul_add(x, d[0])
+    }
+
+    #[inline(always)]
+    fn curvature(&self, x: T) -> T {
+        (self.d[2] * T::TWO).mul_add(x, self.d[1])
+    }
+
+    /// `sum |c_i| |x|^i`; the rounding error of [`Self::value`] is below `6 u` times this
+    /// (see `horner_with_bound`: `2 n u` with `n = 3`).
+    #[inline(always)]
+    fn magnitude(&self, x: T) -> T {
+        let (a, ax) = (&self.abs_c, x.abs());
+        a[3].mul_add(ax, a[2]).mul_add(ax, a[1]).mul_add(ax, a[0])
+    }
+}
+
+/// `6 u`: the noise factor of a cubic's Horner evaluation (see [`Cubic::magnitude`]).
+#[inline(always)]
+fn noise_factor<T: Real>() -> T {
+    T::from_i32(6) * T::UNIT_ROUNDOFF
+}
+
 #[inline(always)]
 fn cubic_roots<T: Real, const FIRST: bool>(c: [T; 4], lo: T, hi: T) -> Roots<T> {
-    if !(lo <= hi) || !(c[0].is_finite() && c[1].is_finite() && c[2].is_finite() && c[3].is_finite()) {
+    if !(lo <= hi)
+        || !(c[0].is_finite() && c[1].is_finite() && c[2].is_finite() && c[3].is_finite())
+    {
         return Roots::none();
     }
     if c[3] == T::ZERO {
         let roots = solve_quadratic_in([c[0], c[1], c[2]], lo, hi);
-        return if FIRST { Roots::from_slice(&roots[..roots.len().min(1)]) } else { roots };
+        return if FIRST {
+            Roots::from_slice(&roots[..roots.len().min(1)])
+        } else {
+            roots
+        };
     }
-    let c = normalize(c);
+    let p = Cubic::new(normalize(c));
 
     // Critical points split [lo, hi] into at most three monotonic pieces.
-    let critical = solve_quadratic([c[1], c[2] * T::TWO, c[3] * T::THREE]);
-    let mut points = [T::ZERO; 4];
-    let mut n = 0;
-    points[n] = lo;
-    n += 1;
+    let critical = solve_quadratic(p.d);
+    let mut points = [hi; 4];
+    let mut n = 1;
+    points[0] = lo;
     for &x in critical.iter() {
         if x > lo && x < hi {
             points[n] = x;
             n += 1;
         }
     }
-    points[n] = hi;
-    n += 1;
+    n += 1; // hi, already in place
 
-    let leading: SignClass = if c[3] > T::ZERO { 1 } else { -1 };
+    // Certified signs at the points.
     let mut class: [SignClass; 4] = [0; 4];
     let mut residual = [T::ZERO; 4];
-    for i in 0..n {
-        let x = points[i];
-        class[i] = if x == T::INFINITY {
-            leading
-        } else if x == T::NEG_INFINITY {
-            -leading
-        } else {
-            let (v, bound) = eval_bounded(&c, x);
-            residual[i] = v.abs();
-            if v.abs() <= bound {
+    let safe = T::pow2(safe_argument_exponent::<T>());
+    if lo >= -safe && hi <= safe {
+        // Moderate arguments (the ray tracer's case): straight-line code over all four slots.
+        let noise = noise_factor::<T>();
+        let values = points.map(|x| p.value(x));
+        let bounds = points.map(|x| noise * p.magnitude(x));
+        residual = values.map(T::abs);
+        for i in 0..4 {
+            class[i] = if residual[i] <= bounds[i] {
                 0
-            } else if v > T::ZERO {
+            } else if values[i] > T::ZERO {
                 1
             } else {
                 -1
-            }
-        };
+            };
+        }
+    } else {
+        let leading: SignClass = if p.c[3] > T::ZERO { 1 } else { -1 };
+        for i in 0..n {
+            let x = points[i];
+            class[i] = if x == T::INFINITY {
+                leading
+            } else if x == T::NEG_INFINITY {
+                -leading
+            } else {
+                let (v, bound) = eval_bounded(&p.c, x);
+                residual[i] = v.abs();
+                if residual[i] <= bound {
+                    0
+                } else if v > T::ZERO {
+                    1
+                } else {
+                    -1
+                }
+            };
+        }
     }
 
+    let guesses = Guesses::new(&p, &critical);
+    if !FIRST
+        && n == 4
+        && class[0] != 0
+        && class[1] == -class[0]
+        && class[2] == class[0]
+        && class[3] == -class[0]
+        && let Some(g) = guesses.roots
+        && let Some(roots) = three_roots_fast(&p, &points, g)
+    {
+        return roots;
+    }
     let mut roots = Roots::none();
     for i in 0..n {
         if class[i] == 0 {
@@ -141,7 +228,13 @@ fn cubic_roots<T: Real, const FIRST: bool>(c: [T; 4], lo: T, hi: T) -> Roots<T> 
         }
         if i + 1 < n
             && class[i] * class[i + 1] < 0
-            && let Some(r) = refine(&c, points[i], points[i + 1], class[i])
+            && let Some(r) = refine(
+                &p,
+                points[i],
+                points[i + 1],
+                class[i] > 0,
+                guesses.for_piece(points[i], points[i + 1]),
+            )
         {
             roots.push(r);
             if FIRST {
@@ -152,8 +245,84 @@ fn cubic_roots<T: Real, const FIRST: bool>(c: [T; 4], lo: T, hi: T) -> Roots<T> 
     roots
 }
 
+/// Starting points for the three roots of a cubic with three real roots, from the
+/// trigonometric solution without trigonometry.
+///
+/// With the inflection point `xi` (midpoint of the critical points), the half-distance `s`
+/// between the critical points and `cos(3 phi) = -p(xi) / (2 c3 s^3)`, the roots are
+/// `xi + 2 s cos(phi + 2 pi k / 3)`. `cos(acos(c) / 3)` is written as `G(w) =
+/// cos(2 acos(w) / 3)` with `w = sqrt((1 + c) / 2)`, which is analytic on `[0, 1]` (the square
+/// root absorbs the branch point at a double root), and `G` is replaced by a degree-4
+/// Chebyshev interpolant with error below 1.1e-5. From there Newton needs about two steps in
+/// f64 and one in f32. Guesses only choose where Newton starts: which pieces hold a root, and
+/// the bracket, still come from the certified sign tests.
+#[derive(Clone, Copy)]
+struct Guesses<T> {
+    /// The critical points (meaningless when there are no guesses).
+    x1: T,
+    x2: T,
+    roots: Option<[T; 3]>,
+}
+
+impl<T: Real> Guesses<T> {
+    #[inline(always)]
+    fn new(p: &Cubic<T>, critical: &Roots<T>) -> Self {
+        let none = Self {
+            x1: T::ZERO,
+            x2: T::ZERO,
+            roots: None,
+        };
+        if critical.len() != 2 {
+            return none;
+        }
+        let (x1, x2) = (critical[0], critical[1]);
+        // Only for moderate arguments, where s^3 and p(xi) cannot overflow.
+        let safe = T::pow2(safe_argument_exponent::<T>());
+        if !(x1.abs() <= safe && x2.abs() <= safe) {
+            return none;
+        }
+        let s = (x2 - x1) * T::HALF;
+        let xi = x1 + s;
+        let cosine = -p.value(xi) / (T::TWO * p.c[3] * s * s * s);
+        if !(cosine.abs() < T::ONE) {
+            return none;
+        }
+        let g = |w: T| {
+            // Chebyshev interpolant of cos(2 acos(w) / 3) on [0, 1], max error 1.06e-5.
+            T::from_f64(-0.008_688_352_07)
+                .mul_add(w, T::from_f64(0.038_352_908_4))
+                .mul_add(w, T::from_f64(-0.106_493_987))
+                .mul_add(w, T::from_f64(0.576_812_48))
+                .mul_add(w, T::from_f64(0.500_010_608))
+        };
+        let two_s = s * T::TWO;
+        let largest = two_s * g(((T::ONE + cosine) * T::HALF).sqrt());
+        let smallest = -two_s * g(((T::ONE - cosine) * T::HALF).sqrt());
+        let middle = -(largest + smallest);
+        Self {
+            x1,
+            x2,
+            roots: Some([xi + smallest, xi + middle, xi + largest]),
+        }
+    }
+
+    /// The guess for the monotonic piece `(a, b)`: pieces left of, between and right of the
+    /// critical points hold the smallest, middle and largest root.
+    #[inline(always)]
+    fn for_piece(&self, a: T, b: T) -> Option<T> {
+        let r = self.roots?;
+        Some(if b <= self.x1 {
+            r[0]
+        } else if a >= self.x2 {
+            r[2]
+        } else {
+            r[1]
+        })
+    }
+}
+
 /// `p(x)` and its error bound, rescaling the variable for huge `|x|` so nothing overflows.
-/// Only the sign of the value is used, and rescaling by `2^(-3k)` keeps it.
+/// Only the sign of the value is used, and rescaling by a power of two keeps it.
 #[inline(always)]
 fn eval_bounded<T: Real>(c: &[T; 4], x: T) -> (T, T) {
     let e = x.exponent();
@@ -189,14 +358,97 @@ fn max_iterations<T: Real>() -> u32 {
     2 * T::BITS + 8
 }
 
-/// The single root in a monotonic piece `(a, b)` whose ends have opposite signs, `sign_a` at
-/// `a`. Infinite ends are replaced by the root bound. `None` if the root is not representable.
+/// Newton steps tried from a guess before falling back to the safeguarded iteration. From the
+/// trigonometric guesses two suffice in f64 and one in f32; a third absorbs a guess near a
+/// double root.
+const FAST_STEPS: u32 = 3;
+
+/// Whether a Newton step `step` to `next`, at slope `df`, has converged: quadratic convergence
+/// puts the next error near `|p''| step^2 / (2 |p'|)` with `|p''| <= curvature` over the
+/// bracket; below half an ulp of `next` (or for a step below one ulp) no further step helps.
+#[inline(always)]
+fn converged<T: Real>(curvature: T, step: T, df: T, next: T) -> bool {
+    curvature * step * step <= (df * next).abs() * T::EPSILON
+        || step.abs() <= next.abs() * T::EPSILON
+}
+
+/// All three roots at once when each of the three pieces between `points` changes sign and
+/// the trigonometric guesses are available: Newton on the three guesses side by side (the
+/// lanes are independent, so they overlap in the pipeline or share SIMD registers), accepted
+/// only when every lane has provably converged inside its own bracket. `None` sends the
+/// caller to the piece-by-piece path.
+#[inline(always)]
+fn three_roots_fast<T: Real>(p: &Cubic<T>, points: &[T; 4], guesses: [T; 3]) -> Option<Roots<T>> {
+    let safe = T::pow2(safe_argument_exponent::<T>());
+    if !(points[0] >= -safe && points[3] <= safe) {
+        return None;
+    }
+    let lo = [points[0], points[1], points[2]];
+    let hi = [points[1], points[2], points[3]];
+    let curvature: [T; 3] =
+        core::array::from_fn(|i| p.curvature(lo[i]).abs().max(p.curvature(hi[i]).abs()));
+    let mut x = guesses;
+    for _ in 0..FAST_STEPS {
+        let df = x.map(|x| p.slope(x));
+        let f = x.map(|x| p.value(x));
+        let step: [T; 3] = core::array::from_fn(|i| f[i] / df[i]);
+        let next: [T; 3] = core::array::from_fn(|i| x[i] - step[i]);
+        let mut inside = true;
+        let mut done = true;
+        for i in 0..3 {
+            inside &= next[i] > lo[i] && next[i] < hi[i];
+            done &= converged(curvature[i], step[i], df[i], next[i]);
+        }
+        if !inside {
+            return None;
+        }
+        if done {
+            return Some(Roots::from_sorted(next));
+        }
+        x = next;
+    }
+    None
+}
+
+/// The single root in a monotonic piece `(a, b)` whose ends have opposite signs (`p(a) > 0`
+/// iff `a_positive`), starting from `guess` when there is one. Infinite ends are replaced by
+/// the root bound. `None` if the root is not representable.
 #[inline]
-fn refine<T: Real>(c: &[T; 4], a: T, b: T, sign_a: SignClass) -> Option<T> {
+fn refine<T: Real>(p: &Cubic<T>, a: T, b: T, a_positive: bool, guess: Option<T>) -> Option<T> {
+    let safe = T::pow2(safe_argument_exponent::<T>());
+    let mut start = None;
+    if let Some(g) = guess
+        && g > a
+        && g < b
+        && a >= -safe
+        && b <= safe
+    {
+        // Fast path: plain Newton from a good guess, accepted once it provably converged
+        // inside the bracket; anything else falls through to the safeguarded iteration.
+        let curvature = p.curvature(a).abs().max(p.curvature(b).abs());
+        let mut x = g;
+        for _ in 0..FAST_STEPS {
+            let df = p.slope(x);
+            let step = p.value(x) / df;
+            let next = x - step;
+            if !(next > a && next < b) {
+                break;
+            }
+            if converged(curvature, step, df, next) {
+                return Some(next);
+            }
+            x = next;
+        }
+        start = Some(x);
+    }
     let (mut a, mut b) = (a, b);
     if !a.is_finite() || !b.is_finite() {
-        let e = root_bound_exponent(c);
-        let bound = if e > T::MAX_EXPONENT { T::MAX } else { T::pow2(e.max(T::MIN_EXPONENT)) };
+        let e = root_bound_exponent(&p.c);
+        let bound = if e > T::MAX_EXPONENT {
+            T::MAX
+        } else {
+            T::pow2(e.max(T::MIN_EXPONENT))
+        };
         let finite_abs = |x: T| if x.is_finite() { x.abs() } else { T::ZERO };
         let (abs_a, abs_b) = (finite_abs(a), finite_abs(b));
         if !a.is_finite() {
@@ -208,60 +460,80 @@ fn refine<T: Real>(c: &[T; 4], a: T, b: T, sign_a: SignClass) -> Option<T> {
         // Only where the bound was clipped to the type's range can the sign fail to change:
         // then the root lies beyond the largest finite value.
         if e > T::MAX_EXPONENT {
-            let positive_at = |x: T| eval_bounded(c, x).0 > T::ZERO;
-            if a == -T::MAX && positive_at(a) != (sign_a > 0) {
+            let positive_at = |x: T| eval_bounded(&p.c, x).0 > T::ZERO;
+            if a == -T::MAX && positive_at(a) != a_positive {
                 return None;
             }
-            if b == T::MAX && positive_at(b) == (sign_a > 0) {
+            if b == T::MAX && positive_at(b) == a_positive {
                 return None;
             }
         }
     }
+    Some(safeguarded_newton(p, a, b, a_positive, start))
+}
 
+/// Newton with a bracket that shrinks at every step, bisection when Newton leaves it or
+/// stalls, and an exact rescaling of the variable for huge arguments.
+fn safeguarded_newton<T: Real>(p: &Cubic<T>, a: T, b: T, a_positive: bool, start: Option<T>) -> T {
     let (mut lo, mut hi) = (a, b);
-    let lo_positive = sign_a > 0;
-    let d = [c[1], c[2] * T::TWO, c[3] * T::THREE];
-    let inflection = -c[2] / d[2];
-    // Fourier's condition: Newton started where p * p'' > 0 converges monotonically.
-    let start = if inflection > lo && inflection < hi {
-        let f = eval_bounded(c, inflection).0;
+    let inflection = -p.c[2] / p.d[2];
+    let start = if let Some(x) = start.filter(|&x| x > lo && x < hi) {
+        x
+    } else if inflection > lo && inflection < hi {
+        // Fourier's condition: Newton started where p * p'' > 0 converges monotonically.
+        // Across the inflection p'' changes sign: keep the half with the root, start there.
+        let f = eval_bounded(&p.c, inflection).0;
         if f == T::ZERO {
-            return Some(inflection);
+            return inflection;
         }
-        if (f > T::ZERO) == lo_positive {
+        if (f > T::ZERO) == a_positive {
             lo = inflection;
         } else {
             hi = inflection;
         }
         inflection
     } else {
-        let curvature_positive = (lo >= inflection) == (c[3] > T::ZERO);
-        if lo_positive == curvature_positive { lo } else { hi }
+        let curvature_positive = (lo >= inflection) == (p.c[3] > T::ZERO);
+        if a_positive == curvature_positive {
+            lo
+        } else {
+            hi
+        }
     };
 
-    let abs_c = [c[0].abs(), c[1].abs(), c[2].abs(), c[3].abs()];
-    let bound_scale = T::from_i32(6) * T::UNIT_ROUNDOFF; // 2 n u with n = 3, as in `horner_with_bound`
     let safe = T::pow2(safe_argument_exponent::<T>());
     let mut x = start;
     let mut step_before_last = T::INFINITY;
     let mut last_step = T::INFINITY;
     let mut slow_steps = 0u32;
     for _ in 0..max_iterations::<T>() {
-        let Step { f, df, magnitude, curvature_lo, curvature_hi, step } = if x.abs() <= safe {
-            newton_step(c, &d, &abs_c, x, lo, hi)
+        let Step {
+            f,
+            df,
+            magnitude,
+            curvature,
+            step,
+        } = if x.abs() <= safe {
+            Step::at(p, x, lo, hi)
         } else {
             // Huge argument: the same step on the polynomial rescaled to m = x / 2^k, exact.
             let k = x.exponent();
-            let cs = rescale_variable(*c, k);
-            let ds = [cs[1], cs[2] * T::TWO, cs[3] * T::THREE];
-            let abs_cs = [cs[0].abs(), cs[1].abs(), cs[2].abs(), cs[3].abs()];
-            let s = newton_step(&cs, &ds, &abs_cs, x.scale_pow2(-k), lo.scale_pow2(-k), hi.scale_pow2(-k));
-            Step { step: s.step.scale_pow2(k), ..s }
+            let scaled = Cubic::new(rescale_variable(p.c, k));
+            let s = Step::at(
+                &scaled,
+                x.scale_pow2(-k),
+                lo.scale_pow2(-k),
+                hi.scale_pow2(-k),
+            );
+            Step {
+                step: s.step.scale_pow2(k),
+                ..s
+            }
         };
         if f == T::ZERO {
-            return Some(x);
+            return x;
         }
-        if (f > T::ZERO) == lo_positive {
+        if (f > T::ZERO) == a_positive {
             lo = x;
         } else {
             hi = x;
@@ -280,59 +552,51 @@ fn refine<T: Real>(c: &[T; 4], a: T, b: T, sign_a: SignClass) -> Option<T> {
         step_before_last = last_step;
         let next = if accept {
             last_step = step;
-            // Quadratic convergence: the error after this step is about |p''| step^2 / (2|p'|),
-            // with |p''| taken at its largest over the bracket (it is linear, so at an end).
-            // Below half an ulp of the result, no further step can improve it. In rescaled
-            // coordinates both sides scale alike, so the test is the same.
-            let curvature = curvature_lo.abs().max(curvature_hi.abs());
-            if curvature * step * step <= (df * newton).abs() * T::EPSILON || step.abs() <= newton.abs() * T::EPSILON {
-                return Some(newton);
+            // In rescaled coordinates both sides of the test scale alike.
+            if converged(curvature, step, df, newton) {
+                return newton;
             }
             newton
         } else {
             // Newton failed. Where |p| is already within its rounding-error bound (a multiple
             // or clustered root, where Newton only converges linearly through noise), x is as
             // good as the conditioning allows: stop. Otherwise bisect.
-            if f.abs() <= bound_scale * magnitude {
-                return Some(x);
+            if f.abs() <= noise_factor::<T>() * magnitude {
+                return x;
             }
             last_step = hi - lo;
             slow_steps = 0;
             midpoint(lo, hi)
         };
         if next == x || next == lo || next == hi {
-            return Some(x); // the bracket is down to adjacent floats
+            return x; // the bracket is down to adjacent floats
         }
         x = next;
     }
-    Some(x)
+    x
 }
 
-/// One Newton evaluation: value, derivative, the magnitude sum for the error bound, `p''` at
-/// both bracket ends, and the Newton step `p / p'`.
+/// One evaluation of the safeguarded iteration: value, slope, the magnitude sum of the error
+/// bound, the largest `|p''|` over the bracket (it is linear, so at an end), and the step.
 struct Step<T> {
     f: T,
     df: T,
     magnitude: T,
-    curvature_lo: T,
-    curvature_hi: T,
+    curvature: T,
     step: T,
 }
 
-#[inline(always)]
-fn newton_step<T: Real>(c: &[T; 4], d: &[T; 3], abs_c: &[T; 4], x: T, lo: T, hi: T) -> Step<T> {
-    let ax = x.abs();
-    let f = c[3].mul_add(x, c[2]).mul_add(x, c[1]).mul_add(x, c[0]);
-    let df = d[2].mul_add(x, d[1]).mul_add(x, d[0]);
-    let magnitude = abs_c[3].mul_add(ax, abs_c[2]).mul_add(ax, abs_c[1]).mul_add(ax, abs_c[0]);
-    let d2 = d[2] * T::TWO;
-    Step {
-        f,
-        df,
-        magnitude,
-        curvature_lo: d2.mul_add(lo, d[1]),
-        curvature_hi: d2.mul_add(hi, d[1]),
-        step: f / df,
+impl<T: Real> Step<T> {
+    #[inline(always)]
+    fn at(p: &Cubic<T>, x: T, lo: T, hi: T) -> Self {
+        let (f, df) = (p.value(x), p.slope(x));
+        Self {
+            f,
+            df,
+            magnitude: p.magnitude(x),
+            curvature: p.curvature(lo).abs().max(p.curvature(hi).abs()),
+            step: f / df,
+        }
     }
 }
 

@@ -25,7 +25,25 @@ use crate::{Real, Roots};
 /// assert!((r[1] + 1e-10).abs() < 1e-25);
 /// ```
 #[must_use]
+#[inline(always)]
 pub fn solve_quadratic<T: Real>(c: [T; 3]) -> Roots<T> {
+    let [c0, c1, c2] = c;
+    // Fast path: finite, no coefficient outside [2^-S, 2^S] relative to 1, c0 and c2 non-zero
+    // and within 2^S of each other: nothing can overflow or underflow, no rescaling needed.
+    // (A NaN or infinity makes the sum fail the first test.)
+    let (a0, a2) = (c0.abs(), c2.abs());
+    let sum = a0 + c1.abs() + a2;
+    let big = T::pow2(safe_coefficient_exponent::<T>());
+    let small = T::pow2(-safe_coefficient_exponent::<T>());
+    if sum <= big && sum >= small && a0 >= a2 * small && a2 >= a0 * small && a2 > T::ZERO {
+        return roots_of_scaled(c0, c1, c2, 0);
+    }
+    solve_quadratic_general(c)
+}
+
+/// The careful path of [`solve_quadratic`]: special cases and rescaling.
+#[inline(never)]
+fn solve_quadratic_general<T: Real>(c: [T; 3]) -> Roots<T> {
     let [c0, c1, c2] = c;
     if !(c0.is_finite() && c1.is_finite() && c2.is_finite()) {
         return Roots::none();
@@ -52,19 +70,30 @@ pub fn solve_quadratic<T: Real>(c: [T; 3]) -> Roots<T> {
     // then near 1 and neither b^2 nor 4ac can underflow to nothing. Only needed when the roots
     // are extreme; the common case skips it.
     let (e0, e2) = (c0.exponent(), c2.exponent());
-    let k = if (e0 - e2).abs() > safe_coefficient_exponent::<T>() { (e0 - e2) >> 1 } else { 0 };
+    let k = if (e0 - e2).abs() > safe_coefficient_exponent::<T>() {
+        (e0 - e2) >> 1
+    } else {
+        0
+    };
     let [c0, c1, c2] = if k == 0 {
         normalize([c0, c1, c2])
     } else {
         normalize([c0, c1.scale_pow2(k), c2.scale_pow2(2 * k)])
     };
 
+    roots_of_scaled(c0, c1, c2, k)
+}
+
+/// Roots of `c0 + c1 y + c2 y^2` (both end coefficients non-zero, no overflow possible),
+/// returned as `x = y 2^k`.
+#[inline(always)]
+fn roots_of_scaled<T: Real>(c0: T, c1: T, c2: T, k: i32) -> Roots<T> {
     let d = discriminant(c0, c1, c2);
+    let mut roots = Roots::none();
     if d < T::ZERO {
-        return Roots::none();
+        return roots;
     }
     let q = -(c1 + d.sqrt().copysign(c1)) * T::HALF;
-    let mut roots = Roots::none();
     if d == T::ZERO {
         roots.push(unscale(q / c2, k));
         return roots;

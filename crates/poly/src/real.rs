@@ -261,7 +261,11 @@ pub trait Real:
         }
         let k = self.ordered_key();
         let next = Self::from_ordered_key(k + 1);
-        if next == Self::ZERO { Self::from_ordered_key(1) } else { next }
+        if next == Self::ZERO {
+            Self::from_ordered_key(1)
+        } else {
+            next
+        }
     }
 
     /// The next representable value towards -infinity.
@@ -346,11 +350,7 @@ macro_rules! impl_real {
                 {
                     <$t>::mul_add(self, a, b)
                 }
-                #[cfg(all(
-                    not(feature = "std"),
-                    target_arch = "x86_64",
-                    target_feature = "fma"
-                ))]
+                #[cfg(all(not(feature = "std"), target_arch = "x86_64", target_feature = "fma"))]
                 {
                     // `core` has no stable `mul_add`; the FMA3 intrinsic is one instruction.
                     use core::arch::x86_64::{$get, $hw_fma, $set};

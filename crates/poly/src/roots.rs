@@ -26,7 +26,10 @@ impl<T: Real> Roots<T> {
     #[must_use]
     #[inline]
     pub const fn none() -> Self {
-        Self { values: [T::ZERO; 3], len: 0 }
+        Self {
+            values: [T::ZERO; 3],
+            len: 0,
+        }
     }
 
     /// Builds a root set from up to three values, which are sorted; used by the solvers.
@@ -41,6 +44,13 @@ impl<T: Real> Roots<T> {
         }
         roots.sort();
         roots
+    }
+
+    /// Three roots already in increasing order.
+    #[must_use]
+    #[inline(always)]
+    pub(crate) fn from_sorted(values: [T; 3]) -> Self {
+        Self { values, len: 3 }
     }
 
     /// Appends a root (the solvers push in increasing order).
