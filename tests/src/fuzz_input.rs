@@ -1,1 +1,112 @@
-//! wip
+//! Decoding of fuzz inputs and the properties every solver answer must have. The cargo-fuzz
+//! targets in `fuzz/` and the replay test `tests/fuzz_replay.rs` both call these, so what the
+//! fuzzer checks and what CI replays are the same code.
+//!
+//! An input is read as raw IEEE bit patterns: `N` coefficients (ascending powers), then the
+//! interval ends `lo` and `hi`. Missing bytes read as zero; when fewer than `N + 2` values are
+//! present the interval is the whole line. Every bit pattern is possible: NaN, infinities,
+//! subnormals, signed zeros.
+
+use nlrt_poly::{Real, first_cubic_root_in, horner_with_bound, solve_cubic_in, solve_quadratic_in};
+
+/// What the decoder made of the bytes.
+#[derive(Clone, Copy, Debug)]
+pub struct Input<T: Real, const N: usize> {
+    /// Coefficients, ascending powers.
+    pub coeffs: [T; N],
+    /// Interval start.
+    pub lo: T,
+    /// Interval end.
+    pub hi: T,
+}
+
+/// Reads `N` coefficients and two interval ends from raw bytes (see the module docs).
+#[must_use]
+pub fn decode<T: Real, const N: usize>(data: &[u8]) -> Input<T, N> {
+    let width = (T::BITS / 8) as usize;
+    let value = |i: usize| {
+        let mut bits = 0u64;
+        for k in 0..width {
+            let byte = data.get(i * width + k).copied().unwrap_or(0);
+            bits |= u64::from(byte) << (8 * k);
+        }
+        T::from_bits_u64(bits)
+    };
+    let coeffs = core::array::from_fn(|i| value(i));
+    let (lo, hi) = if data.len() >= (N + 2) * width {
+        (value(N), value(N + 1))
+    } else {
+        (T::NEG_INFINITY, T::INFINITY)
+    };
+    Input { coeffs, lo, hi }
+}
+
+/// Encodes an input the way [`decode`] reads it (for writing seed files).
+#[must_use]
+pub fn encode<T: Real, const N: usize>(input: &Input<T, N>) -> Vec<u8> {
+    let width = (T::BITS / 8) as usize;
+    let mut out = Vec::new();
+    for v in input.coeffs.iter().chain([&input.lo, &input.hi]) {
+        out.extend_from_slice(&v.to_bits_u64().to_le_bytes()[..width]);
+    }
+    out
+}
+
+/// How far above the evaluation's own error bound a reported root's residual may be: a root
+/// within a few ulps of a true root has `|p(x)| <= |p'| |dx| <= 3 sum|c_i||x|^i * 2u * ulps`,
+/// about `ulps` times the bound of `horner_with_bound` (which is `2 n u sum|c_i||x|^i`), plus the
+/// bound once more for the rounding of the check itself.
+pub const RESIDUAL_FACTOR: f64 = 5.0;
+
+/// Checks the properties of one answer; panics with a description on violation.
+///
+/// - Non-finite coefficients or a NaN/empty interval: no roots (the documented result).
+/// - Otherwise: roots finite, strictly increasing, inside `[lo, hi]`, and each with a residual
+///   `|p(x)| <= RESIDUAL_FACTOR * bound(x)`.
+pub fn check_answer<T: Real, const N: usize>(input: &Input<T, N>, roots: &[T]) {
+    let Input { coeffs, lo, hi } = *input;
+    let finite = coeffs.iter().all(|c| c.is_finite());
+    if !finite || !(lo <= hi) {
+        assert!(roots.is_empty(), "bad input must give no roots: {input:?} -> {roots:?}");
+        return;
+    }
+    for w in roots.windows(2) {
+        assert!(w[0] < w[1], "roots not strictly increasing: {input:?} -> {roots:?}");
+    }
+    for &x in roots {
+        assert!(x.is_finite(), "non-finite root: {input:?} -> {roots:?}");
+        assert!(x >= lo && x <= hi, "root {x:e} outside [{lo:e}, {hi:e}]: {input:?} -> {roots:?}");
+        let (v, bound) = residual(&coeffs, x);
+        assert!(
+            v <= bound * RESIDUAL_FACTOR,
+            "residual {v:e} above {RESIDUAL_FACTOR} x bound {bound:e} at {x:e}: {input:?} -> {roots:?}"
+        );
+    }
+}
+
+/// `|p(x)|` and its rounding bound, in f64 (exact enough for f32 inputs; for f64 inputs the
+/// bound covers the check's own rounding). Overflow makes the bound infinite: no claim.
+fn residual<T: Real, const N: usize>(coeffs: &[T; N], x: T) -> (f64, f64) {
+    let c: [f64; N] = coeffs.map(Real::to_f64);
+    let (v, bound) = horner_with_bound(&c, x.to_f64());
+    // In f64 the f32 evaluation noise is what the solver saw: use the f32 bound scale.
+    let scale = T::UNIT_ROUNDOFF.to_f64() / f64::UNIT_ROUNDOFF;
+    let bound = if bound.is_nan() { f64::INFINITY } else { bound * scale.max(1.0) };
+    (v.abs(), bound)
+}
+
+/// The cubic fuzz target: decode, solve, check; also checks that the nearest-root call agrees.
+pub fn fuzz_cubic<T: Real>(data: &[u8]) {
+    let input = decode::<T, 4>(data);
+    let roots = solve_cubic_in(input.coeffs, input.lo, input.hi);
+    check_answer(&input, &roots);
+    let first = first_cubic_root_in(input.coeffs, input.lo, input.hi);
+    assert_eq!(first, roots.first().copied(), "first root differs from all roots: {input:?}");
+}
+
+/// The quadratic fuzz target: decode, solve, check.
+pub fn fuzz_quadratic<T: Real>(data: &[u8]) {
+    let input = decode::<T, 3>(data);
+    let roots = solve_quadratic_in(input.coeffs, input.lo, input.hi);
+    check_answer(&input, &roots);
+}

@@ -1,0 +1,5 @@
+//! Fuzz target: the cubic solver in f32 on arbitrary bit patterns (see `nlrt_tests::fuzz_input`).
+#![no_main]
+use libfuzzer_sys::fuzz_target;
+
+fuzz_target!(|data: &[u8]| nlrt_tests::fuzz_input::fuzz_cubic::<f32>(data));
