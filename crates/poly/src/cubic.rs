@@ -71,9 +71,6 @@ pub fn first_cubic_root_in<T: Real>(c: [T; 4], lo: T, hi: T) -> Option<T> {
     cubic_roots::<T, true>(c, lo, hi).first().copied()
 }
 
-/// Sign class of `p` at a point: +1, -1, or 0 when `|p|` is within its rounding-error bound.
-type SignClass = i8;
-
 /// A normalized cubic with what every evaluation needs, computed once per solve.
 struct Cubic<T> {
     /// Coefficients, ascending.
@@ -141,8 +138,36 @@ fn cubic_roots<T: Real, const FIRST: bool>(c: [T; 4], lo: T, hi: T) -> Roots<T> 
             roots
         };
     }
-    let p = Cubic::new(normalize(c));
+    let k = balance_exponent(&c);
+    if k == 0 {
+        return balanced_cubic_roots::<T, FIRST>(&Cubic::new(normalize(c)), lo, hi);
+    }
+    // Roots far from unity in size: solve for y = x / 2^k, whose roots are near 1, so that the
+    // terms of p near a root are neither all subnormal nor overflowing. Exact scaling.
+    let p = Cubic::new(rescale_variable(c, k));
+    let mut roots = balanced_cubic_roots::<T, FIRST>(&p, lo.scale_pow2(-k), hi.scale_pow2(-k));
+    for r in roots.as_mut_slice() {
+        *r = r.scale_pow2(k).max(lo).min(hi); // the clamp only acts on underflow rounding
+    }
+    roots
+}
 
+/// The exponent `k` that brings the roots' geometric size `|c_j / c_3|^(1 / (3 - j))` (`c_j`
+/// the lowest non-zero coefficient) near 1 when it is beyond `2^(S / (3 - j))`; 0 otherwise.
+#[inline(always)]
+fn balance_exponent<T: Real>(c: &[T; 4]) -> i32 {
+    let Some(j) = c.iter().position(|&v| v != T::ZERO).filter(|&j| j < 3) else { return 0 };
+    let (aj, a3) = (c[j].abs(), c[3].abs());
+    let window = T::pow2(crate::eval::safe_coefficient_exponent::<T>());
+    if aj <= a3 * window && a3 <= aj * window {
+        return 0;
+    }
+    (c[j].exponent() - c[3].exponent()).div_euclid(3 - j as i32)
+}
+
+/// Roots of a normalized cubic in `[lo, hi]`.
+#[inline(always)]
+fn balanced_cubic_roots<T: Real, const FIRST: bool>(p: &Cubic<T>, lo: T, hi: T) -> Roots<T> {
     // Critical points split [lo, hi] into at most three monotonic pieces.
     let critical = solve_quadratic(p.d);
     let mut points = [hi; 4];
@@ -156,10 +181,21 @@ fn cubic_roots<T: Real, const FIRST: bool>(c: [T; 4], lo: T, hi: T) -> Roots<T> 
     }
     n += 1; // hi, already in place
 
-    // Certified signs at the points.
-    let mut class: [SignClass; 4] = [0; 4];
+    // The computed sign of p at each point, and whether |p| is within its rounding-error
+    // bound there (then the sign may be wrong, and the point may stand for a root).
+    let mut sign: [i8; 4] = [0; 4];
+    let mut near_zero = [false; 4];
     let mut residual = [T::ZERO; 4];
     let safe = T::pow2(safe_argument_exponent::<T>());
+    let sign_of = |v: T| -> i8 {
+        if v > T::ZERO {
+            1
+        } else if v < T::ZERO {
+            -1
+        } else {
+            0
+        }
+    };
     if lo >= -safe && hi <= safe {
         // Moderate arguments (the ray tracer's case): straight-line code over all four slots.
         let noise = noise_factor::<T>();
@@ -167,74 +203,64 @@ fn cubic_roots<T: Real, const FIRST: bool>(c: [T; 4], lo: T, hi: T) -> Roots<T> 
         let bounds = points.map(|x| noise * p.magnitude(x));
         residual = values.map(T::abs);
         for i in 0..4 {
-            class[i] = if residual[i] <= bounds[i] {
-                0
-            } else if values[i] > T::ZERO {
-                1
-            } else {
-                -1
-            };
+            sign[i] = sign_of(values[i]);
+            near_zero[i] = residual[i] <= bounds[i];
         }
     } else {
-        let leading: SignClass = if p.c[3] > T::ZERO { 1 } else { -1 };
+        let leading: i8 = if p.c[3] > T::ZERO { 1 } else { -1 };
         for i in 0..n {
             let x = points[i];
-            class[i] = if x == T::INFINITY {
-                leading
+            if x == T::INFINITY {
+                sign[i] = leading;
             } else if x == T::NEG_INFINITY {
-                -leading
+                sign[i] = -leading;
             } else {
                 let (v, bound) = eval_bounded(&p.c, x);
                 residual[i] = v.abs();
-                if residual[i] <= bound {
-                    0
-                } else if v > T::ZERO {
-                    1
-                } else {
-                    -1
-                }
-            };
+                sign[i] = sign_of(v);
+                near_zero[i] = residual[i] <= bound;
+            }
         }
     }
+    let changes = |i: usize| i + 1 < n && sign[i] * sign[i + 1] < 0;
 
-    let guesses = Guesses::new(&p, &critical);
+    let guesses = Guesses::new(p, &critical);
     if !FIRST
         && n == 4
-        && class[0] != 0
-        && class[1] == -class[0]
-        && class[2] == class[0]
-        && class[3] == -class[0]
+        && changes(0)
+        && changes(1)
+        && changes(2)
         && let Some(g) = guesses.roots
-        && let Some(roots) = three_roots_fast(&p, &points, g)
+        && let Some(roots) = three_roots_fast(p, &points, g)
     {
         return roots;
     }
     let mut roots = Roots::none();
+    let mut last_point: Option<usize> = None; // index of a point reported as a root just before
     for i in 0..n {
-        if class[i] == 0 {
-            // A point indistinguishable from a root. Two such points in a row (no sign change
-            // can lie between them) belong to one multiple root: keep the smaller residual.
-            if i > 0 && class[i - 1] == 0 {
-                if residual[i] < residual[i - 1] {
+        // A point within rounding of zero with no sign change on either side stands for a
+        // root (a tangency, or a root within rounding of an interval end). Where the computed
+        // sign does change, the pieces' own roots are found below instead, so a near-double
+        // root is reported as its two roots. Two such points in a row (nothing between them
+        // but a monotonic piece within rounding of zero) are one root: keep the smaller
+        // residual.
+        let stands_for_root = near_zero[i] && (sign[i] == 0 || !(i > 0 && changes(i - 1)) && !changes(i));
+        if stands_for_root {
+            if let Some(j) = last_point.filter(|&j| j + 1 == i) {
+                if residual[i] < residual[j] {
                     roots.set_last(points[i]);
                 }
             } else {
                 roots.push(points[i]);
             }
+            last_point = Some(i);
             continue;
         }
         if FIRST && !roots.is_empty() {
             return roots; // a run of root-like points has ended
         }
-        if i + 1 < n
-            && class[i] * class[i + 1] < 0
-            && let Some(r) = refine(
-                &p,
-                points[i],
-                points[i + 1],
-                class[i] > 0,
-                guesses.for_piece(points[i], points[i + 1]),
-            )
+        if changes(i)
+            && let Some(r) = refine(p, points[i], points[i + 1], sign[i] > 0, guesses.for_piece(points[i], points[i + 1]))
         {
             roots.push(r);
             if FIRST {
@@ -366,10 +392,14 @@ const FAST_STEPS: u32 = 3;
 /// Whether a Newton step `step` to `next`, at slope `df`, has converged: quadratic convergence
 /// puts the next error near `|p''| step^2 / (2 |p'|)` with `|p''| <= curvature` over the
 /// bracket; below half an ulp of `next` (or for a step below one ulp) no further step helps.
+/// The step must also not be larger than the result: `next = x - step` then rounds with an
+/// error below one ulp of `next`, instead of `u |x|` after a cancellation (a root much closer
+/// to 0 than the previous iterate).
 #[inline(always)]
 fn converged<T: Real>(curvature: T, step: T, df: T, next: T) -> bool {
-    curvature * step * step <= (df * next).abs() * T::EPSILON
-        || step.abs() <= next.abs() * T::EPSILON
+    step.abs() <= next.abs()
+        && (curvature * step * step <= (df * next).abs() * T::EPSILON
+            || step.abs() <= next.abs() * T::EPSILON)
 }
 
 /// All three roots at once when each of the three pieces between `points` changes sign and
@@ -387,25 +417,29 @@ fn three_roots_fast<T: Real>(p: &Cubic<T>, points: &[T; 4], guesses: [T; 3]) -> 
     let hi = [points[1], points[2], points[3]];
     let curvature: [T; 3] =
         core::array::from_fn(|i| p.curvature(lo[i]).abs().max(p.curvature(hi[i]).abs()));
+    // A lane that has converged keeps its value, so each root is exactly what the
+    // piece-by-piece path (and `first_cubic_root_in`) computes.
     let mut x = guesses;
+    let mut done = [false; 3];
     for _ in 0..FAST_STEPS {
         let df = x.map(|x| p.slope(x));
         let f = x.map(|x| p.value(x));
-        let step: [T; 3] = core::array::from_fn(|i| f[i] / df[i]);
-        let next: [T; 3] = core::array::from_fn(|i| x[i] - step[i]);
         let mut inside = true;
-        let mut done = true;
         for i in 0..3 {
-            inside &= next[i] > lo[i] && next[i] < hi[i];
-            done &= converged(curvature[i], step[i], df[i], next[i]);
+            let step = f[i] / df[i];
+            let next = x[i] - step;
+            inside &= done[i] || (next > lo[i] && next < hi[i]);
+            if !done[i] {
+                done[i] = converged(curvature[i], step, df[i], next);
+                x[i] = next;
+            }
         }
         if !inside {
             return None;
         }
-        if done {
-            return Some(Roots::from_sorted(next));
+        if done[0] && done[1] && done[2] {
+            return Some(Roots::from_sorted(x));
         }
-        x = next;
     }
     None
 }
