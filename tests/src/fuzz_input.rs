@@ -67,15 +67,24 @@ pub fn check_answer<T: Real, const N: usize>(input: &Input<T, N>, roots: &[T]) {
     let Input { coeffs, lo, hi } = *input;
     let finite = coeffs.iter().all(|c| c.is_finite());
     if !finite || !(lo <= hi) {
-        assert!(roots.is_empty(), "bad input must give no roots: {input:?} -> {roots:?}");
+        assert!(
+            roots.is_empty(),
+            "bad input must give no roots: {input:?} -> {roots:?}"
+        );
         return;
     }
     for w in roots.windows(2) {
-        assert!(w[0] < w[1], "roots not strictly increasing: {input:?} -> {roots:?}");
+        assert!(
+            w[0] < w[1],
+            "roots not strictly increasing: {input:?} -> {roots:?}"
+        );
     }
     for &x in roots {
         assert!(x.is_finite(), "non-finite root: {input:?} -> {roots:?}");
-        assert!(x >= lo && x <= hi, "root {x:e} outside [{lo:e}, {hi:e}]: {input:?} -> {roots:?}");
+        assert!(
+            x >= lo && x <= hi,
+            "root {x:e} outside [{lo:e}, {hi:e}]: {input:?} -> {roots:?}"
+        );
         let (v, bound) = residual(&coeffs, x);
         assert!(
             v <= bound * RESIDUAL_FACTOR,
@@ -91,7 +100,11 @@ fn residual<T: Real, const N: usize>(coeffs: &[T; N], x: T) -> (f64, f64) {
     let (v, bound) = horner_with_bound(&c, x.to_f64());
     // In f64 the f32 evaluation noise is what the solver saw: use the f32 bound scale.
     let scale = T::UNIT_ROUNDOFF.to_f64() / f64::UNIT_ROUNDOFF;
-    let bound = if bound.is_nan() { f64::INFINITY } else { bound * scale.max(1.0) };
+    let bound = if bound.is_nan() {
+        f64::INFINITY
+    } else {
+        bound * scale.max(1.0)
+    };
     (v.abs(), bound)
 }
 
@@ -101,7 +114,11 @@ pub fn fuzz_cubic<T: Real>(data: &[u8]) {
     let roots = solve_cubic_in(input.coeffs, input.lo, input.hi);
     check_answer(&input, &roots);
     let first = first_cubic_root_in(input.coeffs, input.lo, input.hi);
-    assert_eq!(first, roots.first().copied(), "first root differs from all roots: {input:?}");
+    assert_eq!(
+        first,
+        roots.first().copied(),
+        "first root differs from all roots: {input:?}"
+    );
 }
 
 /// The quadratic fuzz target: decode, solve, check.

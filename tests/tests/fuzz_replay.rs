@@ -9,7 +9,9 @@ fn replay(target: &str, run: fn(&[u8])) {
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../fuzz");
     let mut count = 0;
     for dir in ["corpus", "regressions"] {
-        let Ok(entries) = std::fs::read_dir(root.join(dir).join(target)) else { continue };
+        let Ok(entries) = std::fs::read_dir(root.join(dir).join(target)) else {
+            continue;
+        };
         for entry in entries {
             let path = entry.expect("readable corpus directory").path();
             let data = std::fs::read(&path).expect("readable corpus file");
@@ -18,7 +20,10 @@ fn replay(target: &str, run: fn(&[u8])) {
             count += 1;
         }
     }
-    assert!(count > 0, "no corpus files for {target}: the seed corpus must be committed");
+    assert!(
+        count > 0,
+        "no corpus files for {target}: the seed corpus must be committed"
+    );
     println!("{target}: replayed {count} inputs");
 }
 
@@ -51,16 +56,32 @@ fn write_seed_corpus() {
     use nlrt_poly::Real;
     use nlrt_tests::fuzz_input::{Input, encode};
     fn write<T: Real>(kind: &str) {
-        let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(format!("../fuzz/corpus/{kind}_{}", T::NAME));
+        let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+            .join(format!("../fuzz/corpus/{kind}_{}", T::NAME));
         std::fs::create_dir_all(&dir).unwrap();
         for (i, case) in hard_cubics::<T>().into_iter().enumerate() {
             let bytes = if kind == "cubic" {
-                encode(&Input { coeffs: case.coeffs, lo: case.lo, hi: case.hi })
+                encode(&Input {
+                    coeffs: case.coeffs,
+                    lo: case.lo,
+                    hi: case.hi,
+                })
             } else {
                 let c = case.coeffs;
-                encode(&Input { coeffs: [c[1], c[2] * T::TWO, c[3] * T::THREE], lo: case.lo, hi: case.hi })
+                encode(&Input {
+                    coeffs: [c[1], c[2] * T::TWO, c[3] * T::THREE],
+                    lo: case.lo,
+                    hi: case.hi,
+                })
             };
-            std::fs::write(dir.join(format!("seed-{i:02}-{}", case.name.replace(['/', ',', '^', '(', ')', '+'], "_"))), bytes).unwrap();
+            std::fs::write(
+                dir.join(format!(
+                    "seed-{i:02}-{}",
+                    case.name.replace(['/', ',', '^', '(', ')', '+'], "_")
+                )),
+                bytes,
+            )
+            .unwrap();
         }
         // Bad input: NaN, infinity and an empty interval.
         let bad = [T::NAN, T::INFINITY, T::ONE, T::ONE];

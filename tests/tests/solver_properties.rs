@@ -5,16 +5,25 @@
 
 use nlrt_oracle::families::cubic_from_roots;
 use nlrt_oracle::{Tolerance, Truth};
-use nlrt_poly::{Real, first_cubic_root_in, solve_cubic, solve_cubic_in, solve_quadratic, solve_quadratic_in};
+use nlrt_poly::{
+    Real, first_cubic_root_in, solve_cubic, solve_cubic_in, solve_quadratic, solve_quadratic_in,
+};
 use proptest::prelude::*;
 
 fn config() -> ProptestConfig {
     let cases = if std::env::var_os("NLRT_EXTENSIVE").is_some() {
         20_000
     } else {
-        std::env::var("PROPTEST_CASES").ok().and_then(|v| v.parse().ok()).unwrap_or(256)
+        std::env::var("PROPTEST_CASES")
+            .ok()
+            .and_then(|v| v.parse().ok())
+            .unwrap_or(256)
     };
-    ProptestConfig { cases, failure_persistence: None, ..ProptestConfig::default() }
+    ProptestConfig {
+        cases,
+        failure_persistence: None,
+        ..ProptestConfig::default()
+    }
 }
 
 /// A root: a signed mantissa in [0.5, 1) times 2^e, with e over a wide but type-safe range.
@@ -29,7 +38,11 @@ fn root(max_exp: i32) -> impl Strategy<Value = f64> {
 fn three_roots(max_exp: i32) -> impl Strategy<Value = [f64; 3]> {
     prop_oneof![
         (root(max_exp), root(max_exp), root(max_exp)).prop_map(|(a, b, c)| [a, b, c]),
-        (root(max_exp), -1.0f64..1.0, -1.0f64..1.0).prop_map(|(a, u, v)| [a, a * (1.0 + u), a * (1.0 + v)]),
+        (root(max_exp), -1.0f64..1.0, -1.0f64..1.0).prop_map(|(a, u, v)| [
+            a,
+            a * (1.0 + u),
+            a * (1.0 + v)
+        ]),
         (root(max_exp), 4i32..40, 0.0f64..2.0).prop_map(|(a, j, u)| {
             let gap = 2f64.powi(-j);
             [a, a * (1.0 + gap), a * (1.0 + u * gap)]
@@ -47,7 +60,11 @@ fn judge_all<T: Real>(coeffs: &[T], roots: &[T], lo: T, hi: T) -> Result<(), Tes
         lo,
         hi,
         roots,
-        truth.roots().iter().map(|r| (r.to_f64(), r.multiplicity)).collect::<Vec<_>>(),
+        truth
+            .roots()
+            .iter()
+            .map(|r| (r.to_f64(), r.multiplicity))
+            .collect::<Vec<_>>(),
         v
     );
     for &x in roots {

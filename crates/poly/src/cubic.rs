@@ -1,24 +1,29 @@
 //! Real roots of `c[0] + c[1] x + c[2] x^2 + c[3] x^3`, in the style of Yuksel 2022
 //! ("High-Performance Polynomial Root Finding for Graphics"): the critical points split the
-//! interval into monotonic pieces, and each piece with a sign change holds exactly one root,
-//! found by a bracketed Newton iteration.
+//! interval into monotonic pieces, and each piece whose ends have opposite signs holds exactly
+//! one root, found by a bracketed Newton iteration.
 //!
 //! Where this differs from the reference C++ (cyPolynomial.h), and why:
-//! - Stopping rule: no absolute tolerance. Iteration stops when the value is within the
-//!   rounding-error bound of Horner's rule (the root is then as accurate as the conditioning
-//!   allows), or when quadratic convergence predicts an error below one ulp, or when the step
-//!   is below one ulp.
+//! - Stopping rule: no absolute tolerance. Newton stops when quadratic convergence predicts an
+//!   error below half an ulp (and the last update did not cancel), when the step is below one
+//!   ulp, or, once Newton stalls, when the value is within the rounding-error bound of Horner's
+//!   rule (the root is then as accurate as its conditioning allows).
 //! - No deflation: every root is found on the original polynomial, so a large root cannot
 //!   spoil the small ones.
-//! - Exact power-of-two rescaling of the coefficients and, for huge arguments, of the variable:
-//!   no overflow for any finite coefficients.
+//! - No overflow or underflow for any finite coefficients: moderate inputs (the ray tracer's)
+//!   take a fast path; anything else is evaluated with the coefficients and the variable
+//!   rescaled by exact powers of two at each point (a local normalization), so a coefficient
+//!   is only ever lost where its term is negligible.
 //! - Unbounded pieces are bracketed by Fujiwara's root bound instead of an outward search, and
-//!   Newton starts on the side where `p * p'' > 0` (Fourier's condition), so it converges
-//!   monotonically and never needs to be rejected.
+//!   Newton starts where `p * p'' > 0` (Fourier's condition), so it converges monotonically.
+//! - Starting points for three real roots come from the trigonometric solution, evaluated
+//!   without trigonometry (see [`Guesses`]); the three Newton iterations then run side by side.
 //! - Tangential (double) roots: a critical point where `|p|` is within the evaluation's error
-//!   bound is reported as a root instead of being dropped for lack of a sign change.
+//!   bound, with no sign change on either side, is reported as a root instead of being dropped.
 
-use crate::eval::{horner_with_bound, normalize, rescale_variable, safe_argument_exponent};
+use crate::eval::{
+    horner_with_bound, rescale_variable, safe_argument_exponent, safe_coefficient_exponent,
+};
 use crate::quadratic::{solve_quadratic, solve_quadratic_in};
 use crate::{Real, Roots};
 
@@ -71,23 +76,33 @@ pub fn first_cubic_root_in<T: Real>(c: [T; 4], lo: T, hi: T) -> Option<T> {
     cubic_roots::<T, true>(c, lo, hi).first().copied()
 }
 
-/// A normalized cubic with what every evaluation needs, computed once per solve.
+/// A cubic with what every evaluation needs, computed once per solve.
 struct Cubic<T> {
     /// Coefficients, ascending.
     c: [T; 4],
-    /// Derivative coefficients, ascending.
+    /// Derivative coefficients, ascending (meaningful when `moderate`).
     d: [T; 3],
     /// `|c_i|`, for the rounding-error bound.
     abs_c: [T; 4],
+    /// All non-zero coefficients within `[2^-S, 2^S]`: for `|x| <= 2^R` plain Horner can
+    /// neither overflow nor lose the terms to underflow (see `safe_coefficient_exponent`).
+    moderate: bool,
 }
 
 impl<T: Real> Cubic<T> {
     #[inline(always)]
     fn new(c: [T; 4]) -> Self {
+        let big = T::pow2(safe_coefficient_exponent::<T>());
+        let small = T::pow2(-safe_coefficient_exponent::<T>());
+        let abs_c = [c[0].abs(), c[1].abs(), c[2].abs(), c[3].abs()];
+        let moderate = abs_c
+            .iter()
+            .all(|&a| a <= big && (a >= small || a == T::ZERO));
         Self {
             c,
             d: [c[1], c[2] * T::TWO, c[3] * T::THREE],
-            abs_c: [c[0].abs(), c[1].abs(), c[2].abs(), c[3].abs()],
+            abs_c,
+            moderate,
         }
     }
 
@@ -115,12 +130,67 @@ impl<T: Real> Cubic<T> {
         let (a, ax) = (&self.abs_c, x.abs());
         a[3].mul_add(ax, a[2]).mul_add(ax, a[1]).mul_add(ax, a[0])
     }
+
+    /// Whether plain evaluation at `x` is safe.
+    #[inline(always)]
+    fn plain_at(&self, x: T) -> bool {
+        self.moderate && x.abs() <= T::pow2(safe_argument_exponent::<T>())
+    }
+
+    /// `p(x)` and its rounding-error bound, both possibly scaled by one positive power of two
+    /// (signs and the comparison of the two are exact under that scaling).
+    #[inline(always)]
+    fn value_and_bound(&self, x: T) -> (T, T) {
+        if self.plain_at(x) {
+            (self.value(x), noise_factor::<T>() * self.magnitude(x))
+        } else if x == T::ZERO {
+            (self.c[0], T::ZERO)
+        } else {
+            // Local normalization: the variable by 2^k with |x / 2^k| in [1, 2), the
+            // coefficients so that the largest term there is near 1.
+            let k = x.exponent();
+            horner_with_bound(&rescale_variable(self.c, k), x.scale_pow2(-k))
+        }
+    }
+
+    /// The cubic in `m = x / 2^k`, locally normalized.
+    #[inline]
+    fn rescaled(&self, k: i32) -> Self {
+        Self::new(rescale_variable(self.c, k))
+    }
+
+    /// Critical points (roots of `p'`), from a derivative scaled by 1/4 so that `3 c3` cannot
+    /// overflow.
+    #[inline(always)]
+    fn critical_points(&self) -> Roots<T> {
+        if self.moderate {
+            solve_quadratic(self.d)
+        } else {
+            let q = T::HALF * T::HALF;
+            solve_quadratic([
+                self.c[1] * q,
+                self.c[2] * T::HALF,
+                self.c[3] * (T::THREE * q),
+            ])
+        }
+    }
 }
 
 /// `6 u`: the noise factor of a cubic's Horner evaluation (see [`Cubic::magnitude`]).
 #[inline(always)]
 fn noise_factor<T: Real>() -> T {
     T::from_i32(6) * T::UNIT_ROUNDOFF
+}
+
+#[inline(always)]
+fn sign_of<T: Real>(v: T) -> i8 {
+    if v > T::ZERO {
+        1
+    } else if v < T::ZERO {
+        -1
+    } else {
+        0
+    }
 }
 
 #[inline(always)]
@@ -138,38 +208,10 @@ fn cubic_roots<T: Real, const FIRST: bool>(c: [T; 4], lo: T, hi: T) -> Roots<T> 
             roots
         };
     }
-    let k = balance_exponent(&c);
-    if k == 0 {
-        return balanced_cubic_roots::<T, FIRST>(&Cubic::new(normalize(c)), lo, hi);
-    }
-    // Roots far from unity in size: solve for y = x / 2^k, whose roots are near 1, so that the
-    // terms of p near a root are neither all subnormal nor overflowing. Exact scaling.
-    let p = Cubic::new(rescale_variable(c, k));
-    let mut roots = balanced_cubic_roots::<T, FIRST>(&p, lo.scale_pow2(-k), hi.scale_pow2(-k));
-    for r in roots.as_mut_slice() {
-        *r = r.scale_pow2(k).max(lo).min(hi); // the clamp only acts on underflow rounding
-    }
-    roots
-}
+    let p = Cubic::new(c);
 
-/// The exponent `k` that brings the roots' geometric size `|c_j / c_3|^(1 / (3 - j))` (`c_j`
-/// the lowest non-zero coefficient) near 1 when it is beyond `2^(S / (3 - j))`; 0 otherwise.
-#[inline(always)]
-fn balance_exponent<T: Real>(c: &[T; 4]) -> i32 {
-    let Some(j) = c.iter().position(|&v| v != T::ZERO).filter(|&j| j < 3) else { return 0 };
-    let (aj, a3) = (c[j].abs(), c[3].abs());
-    let window = T::pow2(crate::eval::safe_coefficient_exponent::<T>());
-    if aj <= a3 * window && a3 <= aj * window {
-        return 0;
-    }
-    (c[j].exponent() - c[3].exponent()).div_euclid(3 - j as i32)
-}
-
-/// Roots of a normalized cubic in `[lo, hi]`.
-#[inline(always)]
-fn balanced_cubic_roots<T: Real, const FIRST: bool>(p: &Cubic<T>, lo: T, hi: T) -> Roots<T> {
     // Critical points split [lo, hi] into at most three monotonic pieces.
-    let critical = solve_quadratic(p.d);
+    let critical = p.critical_points();
     let mut points = [hi; 4];
     let mut n = 1;
     points[0] = lo;
@@ -186,18 +228,9 @@ fn balanced_cubic_roots<T: Real, const FIRST: bool>(p: &Cubic<T>, lo: T, hi: T) 
     let mut sign: [i8; 4] = [0; 4];
     let mut near_zero = [false; 4];
     let mut residual = [T::ZERO; 4];
-    let safe = T::pow2(safe_argument_exponent::<T>());
-    let sign_of = |v: T| -> i8 {
-        if v > T::ZERO {
-            1
-        } else if v < T::ZERO {
-            -1
-        } else {
-            0
-        }
-    };
-    if lo >= -safe && hi <= safe {
-        // Moderate arguments (the ray tracer's case): straight-line code over all four slots.
+    let fast = p.plain_at(lo) && p.plain_at(hi);
+    if fast {
+        // Moderate input (the ray tracer's case): straight-line code over all four slots.
         let noise = noise_factor::<T>();
         let values = points.map(|x| p.value(x));
         let bounds = points.map(|x| noise * p.magnitude(x));
@@ -215,23 +248,27 @@ fn balanced_cubic_roots<T: Real, const FIRST: bool>(p: &Cubic<T>, lo: T, hi: T) 
             } else if x == T::NEG_INFINITY {
                 sign[i] = -leading;
             } else {
-                let (v, bound) = eval_bounded(&p.c, x);
-                residual[i] = v.abs();
+                let (v, bound) = p.value_and_bound(x);
+                residual[i] = v.abs() / bound.max(T::MIN_POSITIVE); // scale-free across points
                 sign[i] = sign_of(v);
-                near_zero[i] = residual[i] <= bound;
+                near_zero[i] = v.abs() <= bound;
             }
         }
     }
     let changes = |i: usize| i + 1 < n && sign[i] * sign[i + 1] < 0;
 
-    let guesses = Guesses::new(p, &critical);
+    let guesses = if fast {
+        Guesses::new(&p, &critical)
+    } else {
+        Guesses::NONE
+    };
     if !FIRST
         && n == 4
         && changes(0)
         && changes(1)
         && changes(2)
         && let Some(g) = guesses.roots
-        && let Some(roots) = three_roots_fast(p, &points, g)
+        && let Some(roots) = three_roots_fast(&p, &points, g)
     {
         return roots;
     }
@@ -244,7 +281,8 @@ fn balanced_cubic_roots<T: Real, const FIRST: bool>(p: &Cubic<T>, lo: T, hi: T) 
         // root is reported as its two roots. Two such points in a row (nothing between them
         // but a monotonic piece within rounding of zero) are one root: keep the smaller
         // residual.
-        let stands_for_root = near_zero[i] && (sign[i] == 0 || !(i > 0 && changes(i - 1)) && !changes(i));
+        let stands_for_root =
+            near_zero[i] && (sign[i] == 0 || !(i > 0 && changes(i - 1)) && !changes(i));
         if stands_for_root {
             if let Some(j) = last_point.filter(|&j| j + 1 == i) {
                 if residual[i] < residual[j] {
@@ -260,7 +298,13 @@ fn balanced_cubic_roots<T: Real, const FIRST: bool>(p: &Cubic<T>, lo: T, hi: T) 
             return roots; // a run of root-like points has ended
         }
         if changes(i)
-            && let Some(r) = refine(p, points[i], points[i + 1], sign[i] > 0, guesses.for_piece(points[i], points[i + 1]))
+            && let Some(r) = refine(
+                &p,
+                points[i],
+                points[i + 1],
+                sign[i] > 0,
+                guesses.for_piece(points[i], points[i + 1]),
+            )
         {
             roots.push(r);
             if FIRST {
@@ -281,7 +325,7 @@ fn balanced_cubic_roots<T: Real, const FIRST: bool>(p: &Cubic<T>, lo: T, hi: T) 
 /// root absorbs the branch point at a double root), and `G` is replaced by a degree-4
 /// Chebyshev interpolant with error below 1.1e-5. From there Newton needs about two steps in
 /// f64 and one in f32. Guesses only choose where Newton starts: which pieces hold a root, and
-/// the bracket, still come from the certified sign tests.
+/// the bracket, still come from the sign tests.
 #[derive(Clone, Copy)]
 struct Guesses<T> {
     /// The critical points (meaningless when there are no guesses).
@@ -291,27 +335,28 @@ struct Guesses<T> {
 }
 
 impl<T: Real> Guesses<T> {
+    const NONE: Self = Self {
+        x1: T::ZERO,
+        x2: T::ZERO,
+        roots: None,
+    };
+
+    /// Guesses for a moderate cubic (see [`Cubic::moderate`]).
     #[inline(always)]
     fn new(p: &Cubic<T>, critical: &Roots<T>) -> Self {
-        let none = Self {
-            x1: T::ZERO,
-            x2: T::ZERO,
-            roots: None,
-        };
         if critical.len() != 2 {
-            return none;
+            return Self::NONE;
         }
         let (x1, x2) = (critical[0], critical[1]);
         // Only for moderate arguments, where s^3 and p(xi) cannot overflow.
-        let safe = T::pow2(safe_argument_exponent::<T>());
-        if !(x1.abs() <= safe && x2.abs() <= safe) {
-            return none;
+        if !(p.plain_at(x1) && p.plain_at(x2)) {
+            return Self::NONE;
         }
         let s = (x2 - x1) * T::HALF;
         let xi = x1 + s;
         let cosine = -p.value(xi) / (T::TWO * p.c[3] * s * s * s);
         if !(cosine.abs() < T::ONE) {
-            return none;
+            return Self::NONE;
         }
         let g = |w: T| {
             // Chebyshev interpolant of cos(2 acos(w) / 3) on [0, 1], max error 1.06e-5.
@@ -347,18 +392,6 @@ impl<T: Real> Guesses<T> {
     }
 }
 
-/// `p(x)` and its error bound, rescaling the variable for huge `|x|` so nothing overflows.
-/// Only the sign of the value is used, and rescaling by a power of two keeps it.
-#[inline(always)]
-fn eval_bounded<T: Real>(c: &[T; 4], x: T) -> (T, T) {
-    let e = x.exponent();
-    if e <= safe_argument_exponent::<T>() {
-        horner_with_bound(c, x)
-    } else {
-        horner_with_bound(&rescale_variable(*c, e), x.scale_pow2(-e))
-    }
-}
-
 /// Fujiwara's bound on the roots' magnitude, rounded up to a power of two through exponents
 /// only: every root satisfies `|x| < 2^e` (`i32::MIN` when all lower coefficients are 0).
 #[inline]
@@ -386,37 +419,41 @@ fn max_iterations<T: Real>() -> u32 {
 
 /// Newton steps tried from a guess before falling back to the safeguarded iteration. From the
 /// trigonometric guesses two suffice in f64 and one in f32; a third absorbs a guess near a
-/// double root.
+/// double root or a root much closer to 0 than the guess.
 const FAST_STEPS: u32 = 3;
 
-/// Whether a Newton step `step` to `next`, at slope `df`, has converged: quadratic convergence
-/// puts the next error near `|p''| step^2 / (2 |p'|)` with `|p''| <= curvature` over the
-/// bracket; below half an ulp of `next` (or for a step below one ulp) no further step helps.
-/// The step must also not be larger than the result: `next = x - step` then rounds with an
-/// error below one ulp of `next`, instead of `u |x|` after a cancellation (a root much closer
-/// to 0 than the previous iterate).
+/// Whether the Newton step `step` from `x` (slope `df`) lands on the root to within half an
+/// ulp. Quadratic convergence puts the error after the step near `|p''| step^2 / (2 |p'|)`,
+/// with `|p''|` bounded over `[x, x - 2 step]` (the step and as far again, where the root is
+/// once that error is small; `p''` is linear, so the bound is at an end); below half an ulp
+/// of the result (or for a step below one ulp) no further step helps. Two more conditions:
+/// the step is no larger than the result, so `x - step` rounds with an error below one ulp
+/// instead of `u |x|` after a cancellation (a root much closer to 0 than the iterate); and no
+/// larger than `x`, so the step stays where a locally normalized evaluation at `x` is valid.
 #[inline(always)]
-fn converged<T: Real>(curvature: T, step: T, df: T, next: T) -> bool {
-    step.abs() <= next.abs()
-        && (curvature * step * step <= (df * next).abs() * T::EPSILON
-            || step.abs() <= next.abs() * T::EPSILON)
+fn converged<T: Real>(p: &Cubic<T>, x: T, step: T, df: T) -> bool {
+    let next = x - step;
+    if !(step.abs() <= next.abs() && step.abs() <= x.abs()) {
+        return false;
+    }
+    let (c1, c2) = (p.curvature(x).abs(), p.curvature(x - step * T::TWO).abs());
+    let curvature = if c1.is_nan() || c2.is_nan() {
+        T::INFINITY
+    } else {
+        c1.max(c2)
+    };
+    curvature * step * step <= (df * next).abs() * T::EPSILON
+        || step.abs() <= next.abs() * T::EPSILON
 }
 
 /// All three roots at once when each of the three pieces between `points` changes sign and
 /// the trigonometric guesses are available: Newton on the three guesses side by side (the
-/// lanes are independent, so they overlap in the pipeline or share SIMD registers), accepted
-/// only when every lane has provably converged inside its own bracket. `None` sends the
-/// caller to the piece-by-piece path.
+/// lanes are independent, so they overlap in the pipeline), accepted only when every lane has
+/// converged inside its own bracket. `None` sends the caller to the piece-by-piece path.
 #[inline(always)]
 fn three_roots_fast<T: Real>(p: &Cubic<T>, points: &[T; 4], guesses: [T; 3]) -> Option<Roots<T>> {
-    let safe = T::pow2(safe_argument_exponent::<T>());
-    if !(points[0] >= -safe && points[3] <= safe) {
-        return None;
-    }
     let lo = [points[0], points[1], points[2]];
     let hi = [points[1], points[2], points[3]];
-    let curvature: [T; 3] =
-        core::array::from_fn(|i| p.curvature(lo[i]).abs().max(p.curvature(hi[i]).abs()));
     // A lane that has converged keeps its value, so each root is exactly what the
     // piece-by-piece path (and `first_cubic_root_in`) computes.
     let mut x = guesses;
@@ -430,7 +467,7 @@ fn three_roots_fast<T: Real>(p: &Cubic<T>, points: &[T; 4], guesses: [T; 3]) -> 
             let next = x[i] - step;
             inside &= done[i] || (next > lo[i] && next < hi[i]);
             if !done[i] {
-                done[i] = converged(curvature[i], step, df[i], next);
+                done[i] = converged(p, x[i], step, df[i]);
                 x[i] = next;
             }
         }
@@ -449,17 +486,14 @@ fn three_roots_fast<T: Real>(p: &Cubic<T>, points: &[T; 4], guesses: [T; 3]) -> 
 /// the root bound. `None` if the root is not representable.
 #[inline]
 fn refine<T: Real>(p: &Cubic<T>, a: T, b: T, a_positive: bool, guess: Option<T>) -> Option<T> {
-    let safe = T::pow2(safe_argument_exponent::<T>());
     let mut start = None;
     if let Some(g) = guess
         && g > a
         && g < b
-        && a >= -safe
-        && b <= safe
     {
-        // Fast path: plain Newton from a good guess, accepted once it provably converged
-        // inside the bracket; anything else falls through to the safeguarded iteration.
-        let curvature = p.curvature(a).abs().max(p.curvature(b).abs());
+        // Fast path (guesses exist only for moderate input): plain Newton from a good guess,
+        // accepted once it converged inside the bracket; anything else falls through to the
+        // safeguarded iteration.
         let mut x = g;
         for _ in 0..FAST_STEPS {
             let df = p.slope(x);
@@ -468,7 +502,7 @@ fn refine<T: Real>(p: &Cubic<T>, a: T, b: T, a_positive: bool, guess: Option<T>)
             if !(next > a && next < b) {
                 break;
             }
-            if converged(curvature, step, df, next) {
+            if converged(p, x, step, df) {
                 return Some(next);
             }
             x = next;
@@ -494,7 +528,7 @@ fn refine<T: Real>(p: &Cubic<T>, a: T, b: T, a_positive: bool, guess: Option<T>)
         // Only where the bound was clipped to the type's range can the sign fail to change:
         // then the root lies beyond the largest finite value.
         if e > T::MAX_EXPONENT {
-            let positive_at = |x: T| eval_bounded(&p.c, x).0 > T::ZERO;
+            let positive_at = |x: T| p.value_and_bound(x).0 > T::ZERO;
             if a == -T::MAX && positive_at(a) != a_positive {
                 return None;
             }
@@ -507,16 +541,17 @@ fn refine<T: Real>(p: &Cubic<T>, a: T, b: T, a_positive: bool, guess: Option<T>)
 }
 
 /// Newton with a bracket that shrinks at every step, bisection when Newton leaves it or
-/// stalls, and an exact rescaling of the variable for huge arguments.
+/// stalls, and local normalization wherever plain evaluation is not safe.
 fn safeguarded_newton<T: Real>(p: &Cubic<T>, a: T, b: T, a_positive: bool, start: Option<T>) -> T {
     let (mut lo, mut hi) = (a, b);
-    let inflection = -p.c[2] / p.d[2];
+    // -c2 / (3 c3) without overflow.
+    let inflection = -(p.c[2] / p.c[3]) / T::THREE;
     let start = if let Some(x) = start.filter(|&x| x > lo && x < hi) {
         x
     } else if inflection > lo && inflection < hi {
         // Fourier's condition: Newton started where p * p'' > 0 converges monotonically.
         // Across the inflection p'' changes sign: keep the half with the root, start there.
-        let f = eval_bounded(&p.c, inflection).0;
+        let f = p.value_and_bound(inflection).0;
         if f == T::ZERO {
             return inflection;
         }
@@ -535,7 +570,6 @@ fn safeguarded_newton<T: Real>(p: &Cubic<T>, a: T, b: T, a_positive: bool, start
         }
     };
 
-    let safe = T::pow2(safe_argument_exponent::<T>());
     let mut x = start;
     let mut step_before_last = T::INFINITY;
     let mut last_step = T::INFINITY;
@@ -543,22 +577,25 @@ fn safeguarded_newton<T: Real>(p: &Cubic<T>, a: T, b: T, a_positive: bool, start
     for _ in 0..max_iterations::<T>() {
         let Step {
             f,
-            df,
-            magnitude,
-            curvature,
+            near_zero,
             step,
-        } = if x.abs() <= safe {
-            Step::at(p, x, lo, hi)
+            converges,
+        } = if p.plain_at(x) {
+            Step::at(p, x)
+        } else if x == T::ZERO {
+            // p(0) = c0 exactly; the step from 0 is -c0 / c1 (c1 = 0: an infinite step,
+            // rejected below in favour of bisection).
+            let step = p.c[0] / p.c[1];
+            Step {
+                f: p.c[0],
+                near_zero: p.c[0] == T::ZERO,
+                step,
+                converges: false,
+            }
         } else {
-            // Huge argument: the same step on the polynomial rescaled to m = x / 2^k, exact.
+            // Locally normalized: the same step on the polynomial in m = x / 2^k (exact).
             let k = x.exponent();
-            let scaled = Cubic::new(rescale_variable(p.c, k));
-            let s = Step::at(
-                &scaled,
-                x.scale_pow2(-k),
-                lo.scale_pow2(-k),
-                hi.scale_pow2(-k),
-            );
+            let s = Step::at(&p.rescaled(k), x.scale_pow2(-k));
             Step {
                 step: s.step.scale_pow2(k),
                 ..s
@@ -586,8 +623,7 @@ fn safeguarded_newton<T: Real>(p: &Cubic<T>, a: T, b: T, a_positive: bool, start
         step_before_last = last_step;
         let next = if accept {
             last_step = step;
-            // In rescaled coordinates both sides of the test scale alike.
-            if converged(curvature, step, df, newton) {
+            if converges {
                 return newton;
             }
             newton
@@ -595,7 +631,7 @@ fn safeguarded_newton<T: Real>(p: &Cubic<T>, a: T, b: T, a_positive: bool, start
             // Newton failed. Where |p| is already within its rounding-error bound (a multiple
             // or clustered root, where Newton only converges linearly through noise), x is as
             // good as the conditioning allows: stop. Otherwise bisect.
-            if f.abs() <= noise_factor::<T>() * magnitude {
+            if near_zero {
                 return x;
             }
             last_step = hi - lo;
@@ -610,26 +646,26 @@ fn safeguarded_newton<T: Real>(p: &Cubic<T>, a: T, b: T, a_positive: bool, start
     x
 }
 
-/// One evaluation of the safeguarded iteration: value, slope, the magnitude sum of the error
-/// bound, the largest `|p''|` over the bracket (it is linear, so at an end), and the step.
+/// One evaluation of the safeguarded iteration: the value, whether it is within its
+/// rounding-error bound, the Newton step, and whether taking that step converges (judged in
+/// the evaluation's own, possibly rescaled, coordinates).
 struct Step<T> {
     f: T,
-    df: T,
-    magnitude: T,
-    curvature: T,
+    near_zero: bool,
     step: T,
+    converges: bool,
 }
 
 impl<T: Real> Step<T> {
     #[inline(always)]
-    fn at(p: &Cubic<T>, x: T, lo: T, hi: T) -> Self {
+    fn at(p: &Cubic<T>, x: T) -> Self {
         let (f, df) = (p.value(x), p.slope(x));
+        let step = f / df;
         Self {
             f,
-            df,
-            magnitude: p.magnitude(x),
-            curvature: p.curvature(lo).abs().max(p.curvature(hi).abs()),
-            step: f / df,
+            near_zero: f.abs() <= noise_factor::<T>() * p.magnitude(x),
+            step,
+            converges: converged(p, x, step, df),
         }
     }
 }

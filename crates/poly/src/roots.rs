@@ -73,12 +73,6 @@ impl<T: Real> Roots<T> {
         &self.values[..self.len as usize]
     }
 
-    /// The roots as a mutable slice.
-    #[inline]
-    pub(crate) fn as_mut_slice(&mut self) -> &mut [T] {
-        &mut self.values[..self.len as usize]
-    }
-
     /// Sorts by value (insertion sort of at most three elements).
     #[inline]
     pub(crate) fn sort(&mut self) {
