@@ -1,16 +1,21 @@
 //! Profiling driver: solves cubics with three roots in [0, 1] (the benchmark distribution)
-//! repeatedly. `cargo run --release -p nlrt-tests --example solve_loop [f32|f64] [closed]`
-use nlrt_oracle::families::SplitMix64;
+//! repeatedly. `cargo run --release -p nlrt-tests --example solve_loop [f32|f64] [closed] [whole]`
+use nlrt_oracle::families::{RandomFamily, SplitMix64};
 use nlrt_poly::Real;
 
-fn run<T: Real>(closed: bool) {
+fn run<T: Real>(closed: bool, whole_line: bool) {
     let mut rng = SplitMix64::new(1);
     let cases: Vec<[T; 4]> = (0..100_000)
         .map(|_| {
-            let (a, b, c) = (rng.unit(), rng.unit(), rng.unit());
-            [-(a * b * c), a * b + a * c + b * c, -(a + b + c), 1.0].map(T::from_f64)
+            if whole_line {
+                RandomFamily::LogUniformCoefficients.sample::<T>(&mut rng).coeffs
+            } else {
+                let (a, b, c) = (rng.unit(), rng.unit(), rng.unit());
+                [-(a * b * c), a * b + a * c + b * c, -(a + b + c), 1.0].map(T::from_f64)
+            }
         })
         .collect();
+    let (lo, hi) = if whole_line { (T::NEG_INFINITY, T::INFINITY) } else { (T::ZERO, T::ONE) };
     let reps = std::env::var("REPS")
         .ok()
         .and_then(|r| r.parse().ok())
@@ -21,9 +26,9 @@ fn run<T: Real>(closed: bool) {
         for c in &cases {
             let c = std::hint::black_box(*c);
             n += if closed {
-                nlrt_poly::baseline::solve_cubic_closed_form_in(c, T::ZERO, T::ONE).len()
+                nlrt_poly::baseline::solve_cubic_closed_form_in(c, lo, hi).len()
             } else {
-                nlrt_poly::solve_cubic_in(c, T::ZERO, T::ONE).len()
+                nlrt_poly::solve_cubic_in(c, lo, hi).len()
             };
         }
     }
@@ -38,9 +43,10 @@ fn run<T: Real>(closed: bool) {
 fn main() {
     let args: Vec<String> = std::env::args().collect();
     let closed = args.iter().any(|a| a == "closed");
+    let whole = args.iter().any(|a| a == "whole");
     if args.iter().any(|a| a == "f32") {
-        run::<f32>(closed)
+        run::<f32>(closed, whole)
     } else {
-        run::<f64>(closed)
+        run::<f64>(closed, whole)
     }
 }

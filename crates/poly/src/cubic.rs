@@ -131,10 +131,14 @@ impl<T: Real> Cubic<T> {
         a[3].mul_add(ax, a[2]).mul_add(ax, a[1]).mul_add(ax, a[0])
     }
 
-    /// Whether plain evaluation at `x` is safe.
+    /// Whether plain evaluation at `x` is safe: moderate coefficients and `x` zero or within
+    /// `[2^-R, 2^R]` in magnitude, so that no term overflows or sinks into subnormals (a tiny
+    /// `x` with `c0 = 0` would lose every term).
     #[inline(always)]
     fn plain_at(&self, x: T) -> bool {
-        self.moderate && x.abs() <= T::pow2(safe_argument_exponent::<T>())
+        let r = safe_argument_exponent::<T>();
+        let ax = x.abs();
+        self.moderate && ax <= T::pow2(r) && (ax >= T::pow2(-r) || ax == T::ZERO)
     }
 
     /// `p(x)` and its rounding-error bound, both possibly scaled by one positive power of two
@@ -209,6 +213,26 @@ fn cubic_roots<T: Real, const FIRST: bool>(c: [T; 4], lo: T, hi: T) -> Roots<T> 
         };
     }
     let p = Cubic::new(c);
+    // Every root lies strictly inside Fujiwara's bound: an infinite end can be replaced by it,
+    // so that moderate polynomials solved on the whole line take the fast path too. The
+    // polynomial cannot vanish at the bound, so its sign there is that at infinity.
+    let (lo, hi) = if lo.is_finite() && hi.is_finite() {
+        (lo, hi)
+    } else {
+        let e = root_bound_exponent(&p.c);
+        if e == i32::MIN {
+            // c3 x^3 alone: the only root is 0.
+            (lo.max(T::ZERO), hi.min(T::ZERO))
+        } else if e > T::MAX_EXPONENT {
+            (lo, hi) // beyond the range: the unbounded pieces are bracketed in `refine`
+        } else {
+            let bound = T::pow2(e.max(T::MIN_EXPONENT));
+            (lo.max(-bound), hi.min(bound))
+        }
+    };
+    if !(lo <= hi) {
+        return Roots::none();
+    }
 
     // Critical points split [lo, hi] into at most three monotonic pieces.
     let critical = p.critical_points();
@@ -228,7 +252,7 @@ fn cubic_roots<T: Real, const FIRST: bool>(c: [T; 4], lo: T, hi: T) -> Roots<T> 
     let mut sign: [i8; 4] = [0; 4];
     let mut near_zero = [false; 4];
     let mut residual = [T::ZERO; 4];
-    let fast = p.plain_at(lo) && p.plain_at(hi);
+    let fast = points.iter().all(|&x| p.plain_at(x));
     if fast {
         // Moderate input (the ray tracer's case): straight-line code over all four slots.
         let noise = noise_factor::<T>();
@@ -356,7 +380,7 @@ impl<T: Real> Guesses<T> {
         let xi = x1 + s;
         let cosine = -p.value(xi) / (T::TWO * p.c[3] * s * s * s);
         if !(cosine.abs() < T::ONE) {
-            return Self::NONE;
+            return Self::NONE; // one real root: see `cardano_guess`
         }
         let g = |w: T| {
             // Chebyshev interpolant of cos(2 acos(w) / 3) on [0, 1], max error 1.06e-5.
@@ -390,6 +414,33 @@ impl<T: Real> Guesses<T> {
             r[1]
         })
     }
+}
+
+/// A starting point for the single real root of a moderate cubic that has only one, from
+/// Cardano's formula in its cancellation-free form (Numerical Recipes, 3rd ed., sec. 5.6): for
+/// the depressed cubic `t^3 + P t + Q` with `D = (Q/2)^2 + (P/3)^3 > 0`,
+/// `A = -sign(Q) cbrt(|Q|/2 + sqrt(D))` and `t = A - P / (3A)`. Only a guess: rounding in the
+/// depressed coefficients does not matter, Newton polishes the result in its bracket.
+#[inline]
+fn cardano_guess<T: Real>(p: &Cubic<T>) -> Option<T> {
+    let c = &p.c;
+    let inv = T::ONE / c[3];
+    let a = c[2] * inv;
+    let third = T::ONE / T::THREE;
+    let xi = -a * third;
+    let depressed_p = (c[1] * inv) - a * a * third;
+    let depressed_q = p.value(xi) * inv;
+    let d = (depressed_q * T::HALF) * (depressed_q * T::HALF) + (depressed_p * third) * (depressed_p * third) * (depressed_p * third);
+    if !(d > T::ZERO) {
+        return None;
+    }
+    let big_a = -(depressed_q.abs() * T::HALF + d.sqrt()).cbrt().copysign(depressed_q);
+    if big_a == T::ZERO {
+        return None;
+    }
+    let t = big_a - depressed_p * third / big_a;
+    let x = xi + t;
+    x.is_finite().then_some(x)
 }
 
 /// Fujiwara's bound on the roots' magnitude, rounded up to a power of two through exponents
@@ -487,6 +538,7 @@ fn three_roots_fast<T: Real>(p: &Cubic<T>, points: &[T; 4], guesses: [T; 3]) -> 
 #[inline]
 fn refine<T: Real>(p: &Cubic<T>, a: T, b: T, a_positive: bool, guess: Option<T>) -> Option<T> {
     let mut start = None;
+    let guess = if guess.is_none() && p.moderate && p.plain_at(a) && p.plain_at(b) { cardano_guess(p) } else { guess };
     if let Some(g) = guess
         && g > a
         && g < b
