@@ -8,14 +8,20 @@ fn run<T: Real>(closed: bool, whole_line: bool) {
     let cases: Vec<[T; 4]> = (0..100_000)
         .map(|_| {
             if whole_line {
-                RandomFamily::LogUniformCoefficients.sample::<T>(&mut rng).coeffs
+                RandomFamily::LogUniformCoefficients
+                    .sample::<T>(&mut rng)
+                    .coeffs
             } else {
                 let (a, b, c) = (rng.unit(), rng.unit(), rng.unit());
                 [-(a * b * c), a * b + a * c + b * c, -(a + b + c), 1.0].map(T::from_f64)
             }
         })
         .collect();
-    let (lo, hi) = if whole_line { (T::NEG_INFINITY, T::INFINITY) } else { (T::ZERO, T::ONE) };
+    let (lo, hi) = if whole_line {
+        (T::NEG_INFINITY, T::INFINITY)
+    } else {
+        (T::ZERO, T::ONE)
+    };
     let reps = std::env::var("REPS")
         .ok()
         .and_then(|r| r.parse().ok())

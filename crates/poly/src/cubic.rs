@@ -22,7 +22,7 @@
 //!   bound, with no sign change on either side, is reported as a root instead of being dropped.
 
 use crate::eval::{
-    horner_with_bound, rescale_variable, safe_argument_exponent, safe_coefficient_exponent,
+    horner_with_bound_scaled, rescale_variable, safe_argument_exponent, safe_coefficient_exponent,
 };
 use crate::quadratic::{solve_quadratic, solve_quadratic_in};
 use crate::{Real, Roots};
@@ -147,13 +147,8 @@ impl<T: Real> Cubic<T> {
     fn value_and_bound(&self, x: T) -> (T, T) {
         if self.plain_at(x) {
             (self.value(x), noise_factor::<T>() * self.magnitude(x))
-        } else if x == T::ZERO {
-            (self.c[0], T::ZERO)
         } else {
-            // Local normalization: the variable by 2^k with |x / 2^k| in [1, 2), the
-            // coefficients so that the largest term there is near 1.
-            let k = x.exponent();
-            horner_with_bound(&rescale_variable(self.c, k), x.scale_pow2(-k))
+            horner_with_bound_scaled(&self.c, x)
         }
     }
 
@@ -430,11 +425,14 @@ fn cardano_guess<T: Real>(p: &Cubic<T>) -> Option<T> {
     let xi = -a * third;
     let depressed_p = (c[1] * inv) - a * a * third;
     let depressed_q = p.value(xi) * inv;
-    let d = (depressed_q * T::HALF) * (depressed_q * T::HALF) + (depressed_p * third) * (depressed_p * third) * (depressed_p * third);
+    let d = (depressed_q * T::HALF) * (depressed_q * T::HALF)
+        + (depressed_p * third) * (depressed_p * third) * (depressed_p * third);
     if !(d > T::ZERO) {
         return None;
     }
-    let big_a = -(depressed_q.abs() * T::HALF + d.sqrt()).cbrt().copysign(depressed_q);
+    let big_a = -(depressed_q.abs() * T::HALF + d.sqrt())
+        .cbrt()
+        .copysign(depressed_q);
     if big_a == T::ZERO {
         return None;
     }
@@ -538,7 +536,11 @@ fn three_roots_fast<T: Real>(p: &Cubic<T>, points: &[T; 4], guesses: [T; 3]) -> 
 #[inline]
 fn refine<T: Real>(p: &Cubic<T>, a: T, b: T, a_positive: bool, guess: Option<T>) -> Option<T> {
     let mut start = None;
-    let guess = if guess.is_none() && p.moderate && p.plain_at(a) && p.plain_at(b) { cardano_guess(p) } else { guess };
+    let guess = if guess.is_none() && p.moderate && p.plain_at(a) && p.plain_at(b) {
+        cardano_guess(p)
+    } else {
+        guess
+    };
     if let Some(g) = guess
         && g > a
         && g < b

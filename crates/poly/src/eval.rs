@@ -118,6 +118,20 @@ pub(crate) fn rescale_variable<T: Real, const N: usize>(mut c: [T; N], k: i32) -
     c
 }
 
+/// [`horner_with_bound`] at any finite `x` without overflow or underflow: the variable and the
+/// coefficients are locally normalized (see [`rescale_variable`] with `k` the exponent of `x`),
+/// so value and bound come back multiplied by one and the same positive power of two. Their
+/// signs, and the comparison of the two, are exact.
+#[must_use]
+#[inline]
+pub(crate) fn horner_with_bound_scaled<T: Real, const N: usize>(c: &[T; N], x: T) -> (T, T) {
+    if x == T::ZERO {
+        return (c[0], T::ZERO);
+    }
+    let k = x.exponent();
+    horner_with_bound(&rescale_variable(*c, k), x.scale_pow2(-k))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

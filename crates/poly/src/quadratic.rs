@@ -1,6 +1,6 @@
 //! Real roots of `c[0] + c[1] x + c[2] x^2`.
 
-use crate::eval::{horner_with_bound, normalize, safe_coefficient_exponent};
+use crate::eval::{horner_with_bound_scaled, normalize, safe_coefficient_exponent};
 use crate::{Real, Roots};
 
 /// All distinct real roots of `c[0] + c[1] x + c[2] x^2`, in increasing order.
@@ -152,7 +152,7 @@ fn is_pseudo_root<T: Real>(c: &[T; 3], x: T) -> bool {
     if !x.is_finite() {
         return false;
     }
-    let (v, bound) = horner_with_bound(&normalize(*c), x);
+    let (v, bound) = horner_with_bound_scaled(c, x);
     v.abs() <= bound
 }
 

@@ -9,7 +9,11 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 #[derive(Parser)]
-#[command(name = "nlrt", version, about = "Nonlinear ray tracing of displaced and shell-mapped surfaces: renders, benchmarks and precision reports")]
+#[command(
+    name = "nlrt",
+    version,
+    about = "Nonlinear ray tracing of displaced and shell-mapped surfaces: renders, benchmarks and precision reports"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Option<Command>,
@@ -44,12 +48,21 @@ fn main() -> ExitCode {
         output: None,
     });
     match command {
-        Command::Solvers { samples, seed, passes, output } => {
+        Command::Solvers {
+            samples,
+            seed,
+            passes,
+            output,
+        } => {
             if samples == 0 || passes == 0 {
                 eprintln!("nlrt solvers: --samples and --passes must be at least 1");
                 return ExitCode::from(2);
             }
-            let opts = solvers::Options { samples, seed, passes };
+            let opts = solvers::Options {
+                samples,
+                seed,
+                passes,
+            };
             let table = solvers::markdown(&solvers::run(&opts), &opts);
             print!("{table}");
             if let Some(path) = output

@@ -22,16 +22,33 @@ pub struct Method {
 
 fn roots_crate<T: Real + roots::FloatType>(c: [T; 4], lo: T, hi: T) -> Roots<T> {
     let found = roots::find_roots_cubic(c[3], c[2], c[1], c[0]);
-    let mut inside: Vec<T> = found.as_ref().iter().copied().filter(|&x| x >= lo && x <= hi).collect();
+    let mut inside: Vec<T> = found
+        .as_ref()
+        .iter()
+        .copied()
+        .filter(|&x| x >= lo && x <= hi)
+        .collect();
     inside.dedup();
     Roots::from_slice(&inside[..inside.len().min(3)])
 }
 
 /// The methods compared.
 pub const METHODS: [Method; 3] = [
-    Method { name: "nlrt-poly", f32: solve_cubic_in::<f32>, f64: solve_cubic_in::<f64> },
-    Method { name: "closed form", f32: solve_cubic_closed_form_in::<f32>, f64: solve_cubic_closed_form_in::<f64> },
-    Method { name: "roots crate", f32: roots_crate::<f32>, f64: roots_crate::<f64> },
+    Method {
+        name: "nlrt-poly",
+        f32: solve_cubic_in::<f32>,
+        f64: solve_cubic_in::<f64>,
+    },
+    Method {
+        name: "closed form",
+        f32: solve_cubic_closed_form_in::<f32>,
+        f64: solve_cubic_closed_form_in::<f64>,
+    },
+    Method {
+        name: "roots crate",
+        f32: roots_crate::<f32>,
+        f64: roots_crate::<f64>,
+    },
 ];
 
 /// Per-type access to a method's function.
@@ -89,7 +106,11 @@ pub struct Options {
 
 impl Default for Options {
     fn default() -> Self {
-        Self { samples: 300_000, seed: 2026, passes: 5 }
+        Self {
+            samples: 300_000,
+            seed: 2026,
+            passes: 5,
+        }
     }
 }
 
@@ -107,7 +128,11 @@ pub fn target_features() -> String {
     if cfg!(target_feature = "avx512f") {
         f.push("avx512f");
     }
-    if f.is_empty() { "none (software fma)".to_string() } else { f.join(", ") }
+    if f.is_empty() {
+        "none (software fma)".to_string()
+    } else {
+        f.join(", ")
+    }
 }
 
 fn progress(msg: &str) {
@@ -117,14 +142,22 @@ fn progress(msg: &str) {
 }
 
 fn family_rows<T: Pick>(family: &str, cases: &[Case<T>], opts: &Options) -> Vec<Row> {
-    progress(&format!("{} {family}: oracle on {} polynomials", T::NAME, cases.len()));
-    let truths: Vec<Truth> = cases.par_iter().map(|c| Truth::new(&c.coeffs).expect("finite coefficients")).collect();
+    progress(&format!(
+        "{} {family}: oracle on {} polynomials",
+        T::NAME,
+        cases.len()
+    ));
+    let truths: Vec<Truth> = cases
+        .par_iter()
+        .map(|c| Truth::new(&c.coeffs).expect("finite coefficients"))
+        .collect();
     METHODS
         .iter()
         .map(|m| {
             progress(&format!("{} {family}: {}", T::NAME, m.name));
             let solve = T::pick(m);
-            let answers: Vec<Roots<T>> = cases.iter().map(|c| solve(c.coeffs, c.lo, c.hi)).collect();
+            let answers: Vec<Roots<T>> =
+                cases.iter().map(|c| solve(c.coeffs, c.lo, c.hi)).collect();
             // Timing: whole passes over the family, single thread, median of the passes.
             let mut times: Vec<f64> = (0..opts.passes)
                 .map(|_| {
@@ -144,7 +177,10 @@ fn family_rows<T: Pick>(family: &str, cases: &[Case<T>], opts: &Options) -> Vec<
                 .zip(&answers)
                 .map(|((c, t), a)| t.judge(a, c.lo, c.hi, Tolerance::SOLVER))
                 .collect();
-            let mut errors: Vec<f64> = verdicts.iter().flat_map(|v| v.errors_ulps.iter().copied()).collect();
+            let mut errors: Vec<f64> = verdicts
+                .iter()
+                .flat_map(|v| v.errors_ulps.iter().copied())
+                .collect();
             errors.sort_by(f64::total_cmp);
             Row {
                 method: m.name,
@@ -171,7 +207,11 @@ fn rows_for<T: Pick>(opts: &Options) -> Vec<Row> {
         let cases: Vec<Case<T>> = (0..per_family).map(|_| family.sample(&mut rng)).collect();
         rows.extend(family_rows(family.name(), &cases, opts));
     }
-    rows.extend(family_rows("hard families (all)", &hard_cubics::<T>(), opts));
+    rows.extend(family_rows(
+        "hard families (all)",
+        &hard_cubics::<T>(),
+        opts,
+    ));
     rows
 }
 
@@ -199,7 +239,10 @@ pub fn markdown(rows: &[Row], opts: &Options) -> String {
         opts.passes,
         target_features()
     );
-    let _ = writeln!(s, "| method | type | family | cubics | ns/solve | median ulps | max ulps | true roots | missed | spurious | pseudo |");
+    let _ = writeln!(
+        s,
+        "| method | type | family | cubics | ns/solve | median ulps | max ulps | true roots | missed | spurious | pseudo |"
+    );
     let _ = writeln!(s, "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|");
     for r in rows {
         let _ = writeln!(
@@ -222,5 +265,9 @@ pub fn markdown(rows: &[Row], opts: &Options) -> String {
 }
 
 fn fmt_ulps(x: f64) -> String {
-    if x < 1e4 { format!("{x:.2}") } else { format!("{x:.2e}") }
+    if x < 1e4 {
+        format!("{x:.2}")
+    } else {
+        format!("{x:.2e}")
+    }
 }
