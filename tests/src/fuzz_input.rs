@@ -32,7 +32,7 @@ pub fn decode<T: Real, const N: usize>(data: &[u8]) -> Input<T, N> {
         }
         T::from_bits_u64(bits)
     };
-    let coeffs = core::array::from_fn(|i| value(i));
+    let coeffs = core::array::from_fn(value);
     let (lo, hi) = if data.len() >= (N + 2) * width {
         (value(N), value(N + 1))
     } else {
@@ -68,7 +68,7 @@ pub const RESIDUAL_FACTOR: f64 = 5.0;
 pub fn check_answer<T: Real, const N: usize>(input: &Input<T, N>, roots: &[T]) {
     let Input { coeffs, lo, hi } = *input;
     let finite = coeffs.iter().all(|c| c.is_finite());
-    if !finite || !(lo <= hi) {
+    if !(finite && lo <= hi) {
         assert!(
             roots.is_empty(),
             "bad input must give no roots: {input:?} -> {roots:?}"

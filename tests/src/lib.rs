@@ -1,3 +1,4 @@
+#![allow(clippy::neg_cmp_op_on_partial_ord)] // NaN-aware comparisons are deliberate
 //! Helpers shared by the cross-crate tests and the fuzz targets (which replay the same
 //! properties), so a property is written once.
 

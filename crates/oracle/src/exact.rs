@@ -110,7 +110,7 @@ impl ExactPoly {
         // bounded by 2^-prec relative to the running sum of magnitudes; 4(n+1) 2^-prec m
         // covers them with margin, and the bound's own rounding is far below that margin.
         let n = self.coeffs.len() as u32;
-        let bound = m * Float::with_val(prec, 4 * (n + 1)) >> prec;
+        let bound = (m * Float::with_val(prec, 4 * (n + 1))) >> prec;
         (r, bound)
     }
 
@@ -122,7 +122,7 @@ impl ExactPoly {
             .iter()
             .enumerate()
             .skip(1)
-            .map(|(i, c)| Rational::from(c * Rational::from(i as u32)))
+            .map(|(i, c)| c * Rational::from(i as u32))
             .collect();
         Self::from_rationals(coeffs)
     }
@@ -227,8 +227,8 @@ impl ExactPoly {
         let hi_end = Float::with_val(START_PREC, &bound);
         let d = self.derivative();
         // Discriminant of p' = d0 + d1 x + d2 x^2.
-        let dd = Rational::from(d.coeffs[1].clone().pow(2))
-            - Rational::from(4) * &d.coeffs[2] * &d.coeffs[0];
+        let dd: Rational =
+            d.coeffs[1].clone().pow(2) - Rational::from(4) * &d.coeffs[2] * &d.coeffs[0];
         if dd.cmp0() != Ordering::Greater {
             // Monotonic: one real root. Sign at -bound is -sign(lead).
             return vec![self.refine(lo_end, hi_end, !lead_positive)];
@@ -318,7 +318,7 @@ impl ExactPoly {
             if next > lo && next < hi && converged_at(step.abs()) {
                 return next; // quadratic convergence: the next error is far smaller still
             }
-            if !(next > lo && next < hi) || !next.is_finite() {
+            if !(next > lo && next < hi && next.is_finite()) {
                 next = Float::with_val(prec, &lo + &hi) / 2u32;
             }
             if next == x {
@@ -347,7 +347,7 @@ fn cubic_discriminant(c: &[Rational]) -> Rational {
 /// Roots of a square-free quadratic `c0 + c1 x + c2 x^2` (exact discriminant sign, stable
 /// formula in MPFR), increasing.
 fn quadratic_roots(c0: &Rational, c1: &Rational, c2: &Rational) -> Vec<Float> {
-    let disc = Rational::from(c1.clone().pow(2)) - Rational::from(4) * c2 * c0;
+    let disc: Rational = c1.clone().pow(2) - Rational::from(4) * c2 * c0;
     match disc.cmp0() {
         Ordering::Less => vec![],
         Ordering::Equal => vec![Float::with_val(
@@ -432,9 +432,9 @@ mod tests {
             Rational::from(3),
         );
         let coeffs = vec![
-            Rational::from(-(a.clone() * &b * &c)),
+            -(a.clone() * &b * &c),
             Rational::from(&a * &b) + Rational::from(&a * &c) + Rational::from(&b * &c),
-            Rational::from(-(a.clone() + &b + &c)),
+            -(a.clone() + &b + &c),
             Rational::from(1),
         ];
         let p = ExactPoly::from_rationals(coeffs);

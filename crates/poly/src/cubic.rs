@@ -194,9 +194,8 @@ fn sign_of<T: Real>(v: T) -> i8 {
 
 #[inline(always)]
 fn cubic_roots<T: Real, const FIRST: bool>(c: [T; 4], lo: T, hi: T) -> Roots<T> {
-    if !(lo <= hi)
-        || !(c[0].is_finite() && c[1].is_finite() && c[2].is_finite() && c[3].is_finite())
-    {
+    let finite = c[0].is_finite() && c[1].is_finite() && c[2].is_finite() && c[3].is_finite();
+    if !(lo <= hi && finite) {
         return Roots::none();
     }
     if c[3] == T::ZERO {
@@ -301,7 +300,7 @@ fn cubic_roots<T: Real, const FIRST: bool>(c: [T; 4], lo: T, hi: T) -> Roots<T> 
         // but a monotonic piece within rounding of zero) are one root: keep the smaller
         // residual.
         let stands_for_root =
-            near_zero[i] && (sign[i] == 0 || !(i > 0 && changes(i - 1)) && !changes(i));
+            near_zero[i] && (sign[i] == 0 || !(changes(i) || (i > 0 && changes(i - 1))));
         if stands_for_root {
             if let Some(j) = last_point.filter(|&j| j + 1 == i) {
                 if residual[i] < residual[j] {
@@ -763,7 +762,7 @@ mod tests {
                     // x^3 + x + 1: one real root near -0.6823278
                     let r = solve_cubic::<T>([1.0, 1.0, 0.0, 1.0]);
                     assert_eq!(r.len(), 1);
-                    assert!(close(r[0], -0.682_327_803_828_019_3 as T, 2.0), "{:?}", r);
+                    assert!(close(r[0], T::from_f64(-0.682_327_803_828_019_3), 2.0), "{:?}", r);
                 }
 
                 #[test]

@@ -27,6 +27,9 @@
 //! `target-cpu=x86-64-v3`) so that [`Real::mul_add`] is one instruction.
 #![no_std]
 #![warn(missing_docs)]
+// `!(a <= b)` is deliberate throughout: it is true when either side is NaN, which is how bad
+// input is rejected without a separate NaN test.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 #[cfg(not(any(feature = "std", feature = "libm")))]
 compile_error!("nlrt-poly needs the `std` or the `libm` feature for sqrt, cbrt and fma");
