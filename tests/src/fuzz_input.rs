@@ -7,7 +7,9 @@
 //! present the interval is the whole line. Every bit pattern is possible: NaN, infinities,
 //! subnormals, signed zeros.
 
-use nlrt_poly::{Real, first_cubic_root_in, horner_with_bound, solve_cubic_in, solve_quadratic_in};
+use nlrt_poly::{
+    Real, first_cubic_root_in, horner_with_bound_scaled, solve_cubic_in, solve_quadratic_in,
+};
 
 /// What the decoder made of the bytes.
 #[derive(Clone, Copy, Debug)]
@@ -100,7 +102,7 @@ pub fn check_answer<T: Real, const N: usize>(input: &Input<T, N>, roots: &[T]) {
 fn sign_changes_around<T: Real, const N: usize>(coeffs: &[T; N], x: T) -> bool {
     let c: [f64; N] = coeffs.map(Real::to_f64);
     let sign = |y: T| {
-        let (v, b) = horner_with_bound(&c, y.to_f64());
+        let (v, b) = horner_with_bound_scaled(&c, y.to_f64());
         if v.abs() <= b {
             0
         } else if v > 0.0 {
@@ -113,19 +115,14 @@ fn sign_changes_around<T: Real, const N: usize>(coeffs: &[T; N], x: T) -> bool {
     below == 0 || above == 0 || below != above
 }
 
-/// `|p(x)|` and its rounding bound, in f64 (exact enough for f32 inputs; for f64 inputs the
-/// bound covers the check's own rounding). Overflow makes the bound infinite: no claim.
+/// `|p(x)|` and its rounding bound, evaluated in f64 with local normalization (so neither
+/// overflows nor sinks into subnormals; both carry the same power-of-two factor). For f32
+/// inputs the bound is scaled up to f32's unit roundoff: the noise the solver worked with.
 fn residual<T: Real, const N: usize>(coeffs: &[T; N], x: T) -> (f64, f64) {
     let c: [f64; N] = coeffs.map(Real::to_f64);
-    let (v, bound) = horner_with_bound(&c, x.to_f64());
-    // In f64 the f32 evaluation noise is what the solver saw: use the f32 bound scale.
+    let (v, bound) = horner_with_bound_scaled(&c, x.to_f64());
     let scale = T::UNIT_ROUNDOFF.to_f64() / f64::UNIT_ROUNDOFF;
-    let bound = if bound.is_nan() {
-        f64::INFINITY
-    } else {
-        bound * scale.max(1.0)
-    };
-    (v.abs(), bound)
+    (v.abs(), bound * scale.max(1.0))
 }
 
 /// The cubic fuzz target: decode, solve, check; also checks that the nearest-root call agrees.

@@ -158,20 +158,21 @@ impl<T: Real> Cubic<T> {
         Self::new(rescale_variable(self.c, k))
     }
 
-    /// Critical points (roots of `p'`), from a derivative scaled by 1/4 so that `3 c3` cannot
-    /// overflow.
+    /// Critical points (roots of `p'`). Outside the moderate range the derivative is built from
+    /// `c1..c3` scaled by one power of two that brings the largest to `[1, 2)`: exact when it
+    /// scales up (subnormal coefficients keep every bit), and `3 c3` cannot overflow; what a
+    /// downscale loses is below `2^-1074` of the largest, negligible for the quadratic solver,
+    /// which balances the rest itself.
     #[inline(always)]
     fn critical_points(&self) -> Roots<T> {
         if self.moderate {
-            solve_quadratic(self.d)
-        } else {
-            let q = T::HALF * T::HALF;
-            solve_quadratic([
-                self.c[1] * q,
-                self.c[2] * T::HALF,
-                self.c[3] * (T::THREE * q),
-            ])
+            return solve_quadratic(self.d);
         }
+        let c = &self.c;
+        let top = c[1].abs().max(c[2].abs()).max(c[3].abs());
+        let e = if top == T::ZERO { 0 } else { top.exponent() };
+        let [c1, c2, c3] = [c[1], c[2], c[3]].map(|v| v.scale_pow2(-e));
+        solve_quadratic([c1, c2 * T::TWO, c3 * T::THREE])
     }
 }
 

@@ -84,8 +84,8 @@ pub(crate) fn normalize<T: Real, const N: usize>(mut c: [T; N]) -> [T; N] {
     for v in c {
         m = m.max(v.abs());
     }
-    let s = T::pow2(safe_coefficient_exponent::<T>());
-    if m > s || m < T::ONE / s {
+    let s = safe_coefficient_exponent::<T>();
+    if m > T::pow2(s) || m < T::pow2(-s) {
         let e = m.exponent();
         for v in &mut c {
             *v = v.scale_pow2(-e);
@@ -119,12 +119,23 @@ pub(crate) fn rescale_variable<T: Real, const N: usize>(mut c: [T; N], k: i32) -
 }
 
 /// [`horner_with_bound`] at any finite `x` without overflow or underflow: the variable and the
-/// coefficients are locally normalized (see [`rescale_variable`] with `k` the exponent of `x`),
-/// so value and bound come back multiplied by one and the same positive power of two. Their
-/// signs, and the comparison of the two, are exact.
+/// coefficients are locally normalized (scaled by exact powers of two so that the largest term
+/// at `x` is near 1), so value and bound come back multiplied by one and the same positive
+/// power of two. Their signs, and the comparison of the two, are exact; use it to decide
+/// whether `p(x)` is distinguishable from zero where plain evaluation would overflow or sink
+/// into subnormals.
+///
+/// ```
+/// use nlrt_poly::{horner, horner_with_bound_scaled};
+/// // x^3 at x = 1e-120: the plain value underflows to 0, the scaled one keeps its sign.
+/// let c = [0.0, 0.0, 0.0, 1.0f64];
+/// assert_eq!(horner(&c, 1e-120), 0.0);
+/// let (v, bound) = horner_with_bound_scaled(&c, 1e-120);
+/// assert!(v > bound);
+/// ```
 #[must_use]
 #[inline]
-pub(crate) fn horner_with_bound_scaled<T: Real, const N: usize>(c: &[T; N], x: T) -> (T, T) {
+pub fn horner_with_bound_scaled<T: Real, const N: usize>(c: &[T; N], x: T) -> (T, T) {
     if x == T::ZERO {
         return (c[0], T::ZERO);
     }

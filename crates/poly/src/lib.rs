@@ -45,7 +45,7 @@ mod real;
 mod roots;
 
 pub use cubic::{first_cubic_root_in, solve_cubic, solve_cubic_in};
-pub use eval::{horner, horner_with_bound};
+pub use eval::{horner, horner_with_bound, horner_with_bound_scaled};
 pub use quadratic::{discriminant, solve_quadratic, solve_quadratic_in};
 pub use real::Real;
 pub use roots::Roots;

@@ -1,6 +1,8 @@
 //! Real roots of `c[0] + c[1] x + c[2] x^2`.
 
-use crate::eval::{horner_with_bound_scaled, normalize, safe_coefficient_exponent};
+use crate::eval::{
+    horner_with_bound_scaled, normalize, rescale_variable, safe_coefficient_exponent,
+};
 use crate::{Real, Roots};
 
 /// All distinct real roots of `c[0] + c[1] x + c[2] x^2`, in increasing order.
@@ -75,10 +77,12 @@ fn solve_quadratic_general<T: Real>(c: [T; 3]) -> Roots<T> {
     } else {
         0
     };
+    // One exact power-of-two factor per coefficient (variable scaling and normalization
+    // combined), so nothing passes through the subnormal range on the way.
     let [c0, c1, c2] = if k == 0 {
         normalize([c0, c1, c2])
     } else {
-        normalize([c0, c1.scale_pow2(k), c2.scale_pow2(2 * k)])
+        rescale_variable([c0, c1, c2], k)
     };
 
     roots_of_scaled(c0, c1, c2, k)
