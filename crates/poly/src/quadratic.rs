@@ -68,10 +68,28 @@ fn solve_quadratic_general<T: Real>(c: [T; 3]) -> Roots<T> {
         }
         return roots;
     }
+    let (e0, e1, e2) = (c0.exponent(), c1.exponent(), c2.exponent());
+    if c1 != T::ZERO && e0 + e2 + 4 + T::MANTISSA_DIGITS as i32 <= 2 * e1 {
+        // The middle coefficient dominates: 4|c0 c2| < u c1^2, so sqrt(D) = |c1| (1 - d) with
+        // d < u/2, and the roots are -c0/c1 and -c1/c2 to within a quarter ulp. Dividing the
+        // original coefficients rounds each root once, even where one underflows to a
+        // subnormal or both are far apart beyond any common scaling.
+        let (small, large) = (-c0 / c1, -c1 / c2);
+        let mut roots = Roots::none();
+        for r in if small <= large {
+            [small, large]
+        } else {
+            [large, small]
+        } {
+            if r.is_finite() && roots.last() != Some(&r) {
+                roots.push(r);
+            }
+        }
+        return roots;
+    }
     // Balance the variable, x = 2^k y, so that |c0| ~ |c2| 2^(2k): the product of the roots is
     // then near 1 and neither b^2 nor 4ac can underflow to nothing. Only needed when the roots
     // are extreme; the common case skips it.
-    let (e0, e2) = (c0.exponent(), c2.exponent());
     let k = if (e0 - e2).abs() > safe_coefficient_exponent::<T>() {
         (e0 - e2) >> 1
     } else {
