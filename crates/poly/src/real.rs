@@ -259,13 +259,9 @@ pub trait Real:
         if self.is_nan() || self == Self::INFINITY {
             return self;
         }
-        let k = self.ordered_key();
-        let next = Self::from_ordered_key(k + 1);
-        if next == Self::ZERO {
-            Self::from_ordered_key(1)
-        } else {
-            next
-        }
+        // Both zeros share key 0, so the step from the smallest negative subnormal is to zero
+        // and the step from either zero is to the smallest positive subnormal.
+        Self::from_ordered_key(self.ordered_key() + 1)
     }
 
     /// The next representable value towards -infinity.
@@ -479,6 +475,9 @@ mod tests {
                     assert_eq!(T::ONE.next_up().ordered_key() - T::ONE.ordered_key(), 1);
                     assert_eq!((-T::ZERO).ordered_key(), 0);
                     assert_eq!(T::ZERO.next_down(), -T::from_bits_u64(1));
+                    assert_eq!((-T::ZERO).next_up(), T::from_bits_u64(1));
+                    assert_eq!(T::from_bits_u64(1).next_down(), 0.0);
+                    assert_eq!((-T::from_bits_u64(1)).next_up(), 0.0);
                     assert_eq!(T::ONE.next_up() - T::ONE, T::EPSILON);
                     let m = T::bisect_ordered(-T::ONE, T::ONE);
                     assert_eq!(m, 0.0);
