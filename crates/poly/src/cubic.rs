@@ -87,6 +87,9 @@ struct Cubic<T> {
     /// All non-zero coefficients within `[2^-S, 2^S]`: for `|x| <= 2^R` plain Horner can
     /// neither overflow nor lose the terms to underflow (see `safe_coefficient_exponent`).
     moderate: bool,
+    /// `c0 != 0`: then at tiny `|x|` the value is led by a normal-range term, and terms that
+    /// underflow are negligible beside it; with `c0 = 0` every term can underflow.
+    tiny_safe: bool,
 }
 
 impl<T: Real> Cubic<T> {
@@ -95,14 +98,16 @@ impl<T: Real> Cubic<T> {
         let big = T::pow2(safe_coefficient_exponent::<T>());
         let small = T::pow2(-safe_coefficient_exponent::<T>());
         let abs_c = [c[0].abs(), c[1].abs(), c[2].abs(), c[3].abs()];
-        let moderate = abs_c
-            .iter()
-            .all(|&a| a <= big && (a >= small || a == T::ZERO));
+        // Non-short-circuit `&` / `|`: four independent compares, no branches.
+        let moderate = abs_c.iter().fold(true, |ok, &a| {
+            ok & (a <= big) & ((a >= small) | (a == T::ZERO))
+        });
         Self {
             c,
             d: [c[1], c[2] * T::TWO, c[3] * T::THREE],
             abs_c,
             moderate,
+            tiny_safe: c[0] != T::ZERO,
         }
     }
 
@@ -131,14 +136,25 @@ impl<T: Real> Cubic<T> {
         a[3].mul_add(ax, a[2]).mul_add(ax, a[1]).mul_add(ax, a[0])
     }
 
-    /// Whether plain evaluation at `x` is safe: moderate coefficients and `x` zero or within
-    /// `[2^-R, 2^R]` in magnitude, so that no term overflows or sinks into subnormals (a tiny
-    /// `x` with `c0 = 0` would lose every term).
+    /// Whether plain evaluation at `x` is safe: moderate coefficients, `|x| <= 2^R`, and, when
+    /// `c0 = 0`, `x` zero or `|x| >= 2^-R`, so that no term overflows and the leading terms do
+    /// not sink into subnormals.
     #[inline(always)]
     fn plain_at(&self, x: T) -> bool {
         let r = safe_argument_exponent::<T>();
         let ax = x.abs();
-        self.moderate && ax <= T::pow2(r) && (ax >= T::pow2(-r) || ax == T::ZERO)
+        self.moderate && ax <= T::pow2(r) && (self.tiny_safe || ax >= T::pow2(-r) || ax == T::ZERO)
+    }
+
+    /// [`Self::plain_at`] for every point of `[lo, hi]` at once (the upper bound only needs the
+    /// ends).
+    #[inline(always)]
+    fn plain_on(&self, lo: T, hi: T, points: &[T; 4]) -> bool {
+        let top = T::pow2(safe_argument_exponent::<T>());
+        self.moderate
+            && lo >= -top
+            && hi <= top
+            && (self.tiny_safe || points.iter().all(|&x| self.plain_at(x)))
     }
 
     /// `p(x)` and its rounding-error bound, both possibly scaled by one positive power of two
@@ -247,7 +263,7 @@ fn cubic_roots<T: Real, const FIRST: bool>(c: [T; 4], lo: T, hi: T) -> Roots<T> 
     let mut sign: [i8; 4] = [0; 4];
     let mut near_zero = [false; 4];
     let mut residual = [T::ZERO; 4];
-    let fast = points.iter().all(|&x| p.plain_at(x));
+    let fast = p.plain_on(lo, hi, &points);
     if fast {
         // Moderate input (the ray tracer's case): straight-line code over all four slots.
         let noise = noise_factor::<T>();
@@ -485,49 +501,47 @@ fn converged<T: Real>(p: &Cubic<T>, x: T, step: T, df: T) -> bool {
     if !(step.abs() <= next.abs() && step.abs() <= x.abs()) {
         return false;
     }
-    let (c1, c2) = (p.curvature(x).abs(), p.curvature(x - step * T::TWO).abs());
-    let curvature = if c1.is_nan() || c2.is_nan() {
-        T::INFINITY
-    } else {
-        c1.max(c2)
-    };
+    // Finite: |x - 2 step| <= 3 |x|, where the evaluation is safe (plain or rescaled).
+    let curvature = p
+        .curvature(x)
+        .abs()
+        .max(p.curvature(x - step * T::TWO).abs());
     curvature * step * step <= (df * next).abs() * T::EPSILON
         || step.abs() <= next.abs() * T::EPSILON
 }
 
+/// Newton steps taken from a trigonometric or Cardano guess before convergence is first
+/// checked: from the guesses' accuracy (about 1e-5 relative to the root spacing) one step
+/// reaches f32 precision and two reach f64 precision. Taking them unconditionally lets the three
+/// lanes of [`three_roots_fast`] run as straight-line (vectorizable) code.
+#[inline(always)]
+fn fixed_steps<T: Real>() -> u32 {
+    if T::MANTISSA_DIGITS > 24 { 2 } else { 1 }
+}
+
 /// All three roots at once when each of the three pieces between `points` changes sign and
-/// the trigonometric guesses are available: Newton on the three guesses side by side (the
-/// lanes are independent, so they overlap in the pipeline), accepted only when every lane has
-/// converged inside its own bracket. `None` sends the caller to the piece-by-piece path.
+/// the trigonometric guesses are available: [`fixed_steps`] Newton steps on the three guesses
+/// side by side, accepted only when every lane's last step has converged inside its own
+/// bracket. The steps are those the piece-by-piece path takes, so each root is exactly what it
+/// (and `first_cubic_root_in`) computes. `None` sends the caller to the piece-by-piece path.
 #[inline(always)]
 fn three_roots_fast<T: Real>(p: &Cubic<T>, points: &[T; 4], guesses: [T; 3]) -> Option<Roots<T>> {
-    let lo = [points[0], points[1], points[2]];
-    let hi = [points[1], points[2], points[3]];
-    // A lane that has converged keeps its value, so each root is exactly what the
-    // piece-by-piece path (and `first_cubic_root_in`) computes.
     let mut x = guesses;
-    let mut done = [false; 3];
-    for _ in 0..FAST_STEPS {
-        let df = x.map(|x| p.slope(x));
+    let mut before = x;
+    let mut df = [T::ZERO; 3];
+    let mut step = [T::ZERO; 3];
+    for _ in 0..fixed_steps::<T>() {
+        before = x;
+        df = x.map(|x| p.slope(x));
         let f = x.map(|x| p.value(x));
-        let mut inside = true;
-        for i in 0..3 {
-            let step = f[i] / df[i];
-            let next = x[i] - step;
-            inside &= done[i] || (next > lo[i] && next < hi[i]);
-            if !done[i] {
-                done[i] = converged(p, x[i], step, df[i]);
-                x[i] = next;
-            }
-        }
-        if !inside {
-            return None;
-        }
-        if done[0] && done[1] && done[2] {
-            return Some(Roots::from_sorted(x));
-        }
+        step = core::array::from_fn(|i| f[i] / df[i]);
+        x = core::array::from_fn(|i| x[i] - step[i]);
     }
-    None
+    let mut ok = true;
+    for i in 0..3 {
+        ok &= x[i] > points[i] && x[i] < points[i + 1] && converged(p, before[i], step[i], df[i]);
+    }
+    ok.then(|| Roots::from_sorted(x))
 }
 
 /// The single root in a monotonic piece `(a, b)` whose ends have opposite signs (`p(a) > 0`
@@ -549,15 +563,18 @@ fn refine<T: Real>(p: &Cubic<T>, a: T, b: T, a_positive: bool, guess: Option<T>)
         // accepted once it converged inside the bracket; anything else falls through to the
         // safeguarded iteration.
         let mut x = g;
-        for _ in 0..FAST_STEPS {
+        for k in 0..FAST_STEPS {
             let df = p.slope(x);
             let step = p.value(x) / df;
             let next = x - step;
-            if !(next > a && next < b) {
-                break;
-            }
-            if converged(p, x, step, df) {
-                return Some(next);
+            // The first `fixed_steps` are taken unconditionally, as in `three_roots_fast`.
+            if k + 1 >= fixed_steps::<T>() {
+                if !(next > a && next < b) {
+                    break;
+                }
+                if converged(p, x, step, df) {
+                    return Some(next);
+                }
             }
             x = next;
         }
