@@ -263,11 +263,12 @@ fn cubic_roots<T: Real, const FIRST: bool>(c: [T; 4], lo: T, hi: T) -> Roots<T> 
     let mut sign: [i8; 4] = [0; 4];
     let mut near_zero = [false; 4];
     let mut residual = [T::ZERO; 4];
+    let mut values = [T::ZERO; 4];
     let fast = p.plain_on(lo, hi, &points);
     if fast {
         // Moderate input (the ray tracer's case): straight-line code over all four slots.
         let noise = noise_factor::<T>();
-        let values = points.map(|x| p.value(x));
+        values = points.map(|x| p.value(x));
         let bounds = points.map(|x| noise * p.magnitude(x));
         residual = values.map(T::abs);
         for i in 0..4 {
@@ -339,6 +340,7 @@ fn cubic_roots<T: Real, const FIRST: bool>(c: [T; 4], lo: T, hi: T) -> Roots<T> 
                 points[i + 1],
                 sign[i] > 0,
                 guesses.for_piece(points[i], points[i + 1]),
+                fast.then(|| critical_end(&points, &values, i, n)).flatten(),
             )
         {
             roots.push(r);
@@ -390,9 +392,15 @@ impl<T: Real> Guesses<T> {
         let s = (x2 - x1) * T::HALF;
         let xi = x1 + s;
         let cosine = -p.value(xi) / (T::TWO * p.c[3] * s * s * s);
-        if !(cosine.abs() < T::ONE) {
-            return Self::NONE; // one real root: see `cardano_guess`
+        // |cos 3 phi| > 1 means one real root (see `cardano_guess`). Just above 1 the formula
+        // still places the real root well (two roots have merged into a complex pair near a
+        // critical point), and rounding of a huge root spread lands here too: clamp. Cardano's
+        // form takes over where the pair has clearly left the real line.
+        let near_one = T::ONE + T::pow2(-10);
+        if !(cosine.abs() < near_one) {
+            return Self::NONE;
         }
+        let cosine = cosine.max(-T::ONE).min(T::ONE);
         let g = |w: T| {
             // Chebyshev interpolant of cos(2 acos(w) / 3) on [0, 1], max error 1.06e-5.
             T::from_f64(-0.008_688_352_07)
@@ -455,6 +463,33 @@ fn cardano_guess<T: Real>(p: &Cubic<T>) -> Option<T> {
     let t = big_a - depressed_p * third / big_a;
     let x = xi + t;
     x.is_finite().then_some(x)
+}
+
+/// The critical-point end of piece `i` (interior points are critical points) with the value
+/// there; of two, the one where `|p|` is smaller (the root is nearer to it).
+#[inline(always)]
+fn critical_end<T: Real>(points: &[T; 4], values: &[T; 4], i: usize, n: usize) -> Option<(T, T)> {
+    let left = (i > 0).then(|| (points[i], values[i]));
+    let right = (i + 2 < n).then(|| (points[i + 1], values[i + 1]));
+    match (left, right) {
+        (Some(l), Some(r)) => Some(if l.1.abs() <= r.1.abs() { l } else { r }),
+        (l, r) => l.or(r),
+    }
+}
+
+/// A starting point from the Taylor expansion at a critical point `c` (where `p' = 0`):
+/// `p(c) + p''(c) (x - c)^2 / 2 = 0`, on the side of `c` inside `(a, b)`. Good where the root is
+/// close to `c` compared with the scale of the cubic term, exactly where the trigonometric
+/// guesses (accurate to about 1e-5 of the critical points' spacing) are not: one root far from
+/// two others, as when the leading coefficient is tiny.
+#[inline]
+fn taylor_guess<T: Real>(p: &Cubic<T>, (c, value): (T, T), a: T, b: T) -> Option<T> {
+    let d2 = -T::TWO * value / p.curvature(c);
+    if !(d2 > T::ZERO) {
+        return None;
+    }
+    let g = if c == a { c + d2.sqrt() } else { c - d2.sqrt() };
+    (g > a && g < b).then_some(g)
 }
 
 /// Fujiwara's bound on the roots' magnitude, rounded up to a power of two through exponents
@@ -548,17 +583,29 @@ fn three_roots_fast<T: Real>(p: &Cubic<T>, points: &[T; 4], guesses: [T; 3]) -> 
 /// iff `a_positive`), starting from `guess` when there is one. Infinite ends are replaced by
 /// the root bound. `None` if the root is not representable.
 #[inline]
-fn refine<T: Real>(p: &Cubic<T>, a: T, b: T, a_positive: bool, guess: Option<T>) -> Option<T> {
+fn refine<T: Real>(
+    p: &Cubic<T>,
+    a: T,
+    b: T,
+    a_positive: bool,
+    guess: Option<T>,
+    critical: Option<(T, T)>,
+) -> Option<T> {
     let mut start = None;
     let guess = if guess.is_none() && p.moderate && p.plain_at(a) && p.plain_at(b) {
         cardano_guess(p)
     } else {
         guess
     };
-    if let Some(g) = guess
-        && g > a
-        && g < b
+    // The closed-form guess first, then the Taylor guess at a critical end (when the piece is
+    // plain-evaluable): each gets the fast path; what fails falls to the safeguarded iteration.
+    for g in [guess, critical.and_then(|c| taylor_guess(p, c, a, b))]
+        .into_iter()
+        .flatten()
     {
+        if !(g > a && g < b) {
+            continue;
+        }
         // Fast path (guesses exist only for moderate input): plain Newton from a good guess,
         // accepted once it converged inside the bracket; anything else falls through to the
         // safeguarded iteration.
@@ -578,7 +625,9 @@ fn refine<T: Real>(p: &Cubic<T>, a: T, b: T, a_positive: bool, guess: Option<T>)
             }
             x = next;
         }
-        start = Some(x);
+        if start.is_none() && x > a && x < b {
+            start = Some(x);
+        }
     }
     let (mut a, mut b) = (a, b);
     if !a.is_finite() || !b.is_finite() {
