@@ -24,7 +24,7 @@
 use crate::eval::{
     horner_with_bound_scaled, rescale_variable, safe_argument_exponent, safe_coefficient_exponent,
 };
-use crate::quadratic::{solve_quadratic, solve_quadratic_in};
+use crate::quadratic::{discriminant, solve_quadratic, solve_quadratic_in};
 use crate::{Real, Roots};
 
 /// All distinct real roots of `c[0] + c[1] x + c[2] x^2 + c[3] x^3`, in increasing order.
@@ -174,6 +174,38 @@ impl<T: Real> Cubic<T> {
         Self::new(rescale_variable(self.c, k))
     }
 
+    /// For a moderate cubic: the critical points and the trigonometric guesses, sharing one
+    /// square root and computed side by side (the guesses do not wait for the critical points'
+    /// divisions). The critical points use the stable quadratic formula on `p'` (Kahan's
+    /// discriminant; `q / a` as `q * (1 / a)`, one extra rounding, harmless for splitting
+    /// points); the moderate window rules out overflow and underflow in it.
+    #[inline(always)]
+    fn critical_points_and_guesses(&self) -> (Roots<T>, Guesses<T>) {
+        let [a0, a1, a2] = self.d;
+        let disc = discriminant(a0, a1, a2);
+        let inv_a2 = T::ONE / a2;
+        let mut critical = Roots::none();
+        if disc < T::ZERO {
+            return (critical, Guesses::NONE);
+        }
+        if disc == T::ZERO {
+            critical.push(-a1 * T::HALF * inv_a2);
+            return (critical, Guesses::NONE);
+        }
+        let root = disc.sqrt();
+        let q = -(a1 + root.copysign(a1)) * T::HALF;
+        let (r1, r2) = (q * inv_a2, a0 / q);
+        let (x1, x2) = if r1 <= r2 { (r1, r2) } else { (r2, r1) };
+        critical.push(x1);
+        critical.push(x2);
+        // Roots of p' are xi -+ s with xi = -a1 / (2 a2) and s = sqrt(disc) / (2 |a2|).
+        let half_inv = inv_a2 * T::HALF;
+        let xi = -a1 * half_inv;
+        let s = root * half_inv.abs();
+        let inv_s = (a2 * T::TWO).abs() / root;
+        (critical, Guesses::from_parts(self, x1, x2, xi, s, inv_s))
+    }
+
     /// Critical points (roots of `p'`). Outside the moderate range the derivative is built from
     /// `c1..c3` scaled by one power of two that brings the largest to `[1, 2)`: exact when it
     /// scales up (subnormal coefficients keep every bit), and `3 c3` cannot overflow; what a
@@ -246,7 +278,11 @@ fn cubic_roots<T: Real, const FIRST: bool>(c: [T; 4], lo: T, hi: T) -> Roots<T> 
     }
 
     // Critical points split [lo, hi] into at most three monotonic pieces.
-    let critical = p.critical_points();
+    let (critical, early_guesses) = if p.moderate {
+        p.critical_points_and_guesses()
+    } else {
+        (p.critical_points(), Guesses::NONE)
+    };
     let mut points = [hi; 4];
     let mut n = 1;
     points[0] = lo;
@@ -293,11 +329,7 @@ fn cubic_roots<T: Real, const FIRST: bool>(c: [T; 4], lo: T, hi: T) -> Roots<T> 
     }
     let changes = |i: usize| i + 1 < n && sign[i] * sign[i + 1] < 0;
 
-    let guesses = if fast {
-        Guesses::new(&p, &critical)
-    } else {
-        Guesses::NONE
-    };
+    let guesses = if fast { early_guesses } else { Guesses::NONE };
     if !FIRST
         && n == 4
         && changes(0)
@@ -378,20 +410,17 @@ impl<T: Real> Guesses<T> {
         roots: None,
     };
 
-    /// Guesses for a moderate cubic (see [`Cubic::moderate`]).
+    /// Guesses from the critical points `x1 < x2`, their midpoint `xi` (the inflection), their
+    /// half-distance `s` and `1 / s`, for a moderate cubic (see [`Cubic::moderate`]).
     #[inline(always)]
-    fn new(p: &Cubic<T>, critical: &Roots<T>) -> Self {
-        if critical.len() != 2 {
-            return Self::NONE;
-        }
-        let (x1, x2) = (critical[0], critical[1]);
+    fn from_parts(p: &Cubic<T>, x1: T, x2: T, xi: T, s: T, inv_s: T) -> Self {
         // Only for moderate arguments, where s^3 and p(xi) cannot overflow.
         if !(p.plain_at(x1) && p.plain_at(x2)) {
             return Self::NONE;
         }
-        let s = (x2 - x1) * T::HALF;
-        let xi = x1 + s;
-        let cosine = -p.value(xi) / (T::TWO * p.c[3] * s * s * s);
+        // cos 3 phi = -p(xi) / (2 c3 s^3), with the divisions done ahead as reciprocals.
+        let inv_two_c3 = T::ONE / (T::TWO * p.c[3]);
+        let cosine = -p.value(xi) * inv_two_c3 * (inv_s * inv_s * inv_s);
         // |cos 3 phi| > 1 means one real root (see `cardano_guess`). Just above 1 the formula
         // still places the real root well (two roots have merged into a complex pair near a
         // critical point), and rounding of a huge root spread lands here too: clamp. Cardano's
