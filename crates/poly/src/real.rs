@@ -52,9 +52,9 @@ pub trait Real:
     + 'static
 {
     /// The matching glam 2-vector (`Vec2` or `DVec2`).
-    type Vec2: Copy + Debug + PartialEq + Send + Sync + 'static;
+    type Vec2: crate::Vector2<Self>;
     /// The matching glam 3-vector (`Vec3` or `DVec3`).
-    type Vec3: Copy + Debug + PartialEq + Send + Sync + 'static;
+    type Vec3: crate::Vector3<Self>;
     /// The matching glam 3x3 matrix (`Mat3` or `DMat3`).
     type Mat3: Copy + Debug + PartialEq + Send + Sync + 'static;
     /// The unsigned integer of the same width, for bit manipulation.

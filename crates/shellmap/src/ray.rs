@@ -1,0 +1,169 @@
+//! World rays and their images in a prism: nonlinear rays (Ogaki 2023, sec. 4.1-4.2).
+
+use crate::prism::Prism;
+use nlrt_poly::{Real, Vector2, Vector3, difference_of_products};
+
+/// A world-space ray `o + t w` with unit direction.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Ray<T: Real> {
+    /// Origin `o`.
+    pub origin: T::Vec3,
+    /// Unit direction `w`.
+    pub dir: T::Vec3,
+}
+
+impl<T: Real> Ray<T> {
+    /// A ray; the direction is normalized. `None` when the direction is zero or anything is
+    /// not finite.
+    #[must_use]
+    pub fn new(origin: T::Vec3, dir: T::Vec3) -> Option<Self> {
+        let len = dir.length();
+        let finite = [origin.x(), origin.y(), origin.z()]
+            .iter()
+            .all(|v| v.is_finite());
+        if !(len > T::ZERO && len.is_finite() && finite) {
+            return None;
+        }
+        Some(Self {
+            origin,
+            dir: dir * (T::ONE / len),
+        })
+    }
+
+    /// The point at parameter `t`.
+    #[must_use]
+    #[inline]
+    pub fn at(&self, t: T) -> T::Vec3 {
+        self.origin + self.dir * t
+    }
+
+    /// Two unit vectors perpendicular to the direction and to each other (Duff et al. 2017,
+    /// "Building an Orthonormal Basis, Revisited": branch-free, no cancellation).
+    #[must_use]
+    pub fn perpendiculars(&self) -> [T::Vec3; 2] {
+        let n = self.dir;
+        let sign = T::ONE.copysign(n.z());
+        let a = -T::ONE / (sign + n.z());
+        let b = n.x() * n.y() * a;
+        [
+            T::Vec3::new(T::ONE + sign * n.x() * n.x() * a, sign * b, -sign * n.x()),
+            T::Vec3::new(b, sign + n.y() * n.y() * a, -n.y()),
+        ]
+    }
+}
+
+/// A linear function `c0 + c1 h`.
+type Linear<T> = [T; 2];
+
+/// `f g - k l` for linear `f, g, k, l`: a quadratic whose coefficients are accurate differences
+/// of products (the constant and quadratic ones directly, the middle one as two).
+#[inline]
+fn det_of_linears<T: Real>(f: Linear<T>, g: Linear<T>, k: Linear<T>, l: Linear<T>) -> [T; 3] {
+    [
+        difference_of_products(f[0], g[0], k[0], l[0]),
+        difference_of_products(f[0], g[1], k[0], l[1])
+            + difference_of_products(f[1], g[0], k[1], l[0]),
+        difference_of_products(f[1], g[1], k[1], l[1]),
+    ]
+}
+
+#[inline(always)]
+fn quadratic_at<T: Real>(c: &[T; 3], h: T) -> T {
+    c[2].mul_add(h, c[1]).mul_add(h, c[0])
+}
+
+/// A world ray seen in one prism: the curve `h -> (alpha(h), beta(h), h)` in canonical space
+/// and `h -> (u(h), v(h), h)` in texture space, each coordinate a ratio of quadratics with the
+/// common denominator `d(h)` (Eq. 7 and 8).
+///
+/// Built from Eq. 6 (the ray equation dotted with two unit vectors perpendicular to the ray),
+/// by Cramer's rule, with every 2x2 determinant an accurate difference of products.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NonlinearRay<T: Real> {
+    /// Numerator of `alpha(h)`, ascending powers.
+    pub alpha: [T; 3],
+    /// Numerator of `beta(h)`, ascending powers.
+    pub beta: [T; 3],
+    /// Common denominator `d(h)`, ascending powers.
+    pub d: [T; 3],
+    /// Numerator of `u(h)` (Eq. 8), ascending powers.
+    pub u: [T; 3],
+    /// Numerator of `v(h)` (Eq. 8), ascending powers.
+    pub v: [T; 3],
+    /// The two rows of Eq. 6: `(a(h), b(h), r(h))` with `a alpha + b beta = r`, each linear in `h`;
+    /// kept for the best-conditioned solve of Eq. 11.
+    pub rows: [[Linear<T>; 3]; 2],
+    /// The world ray.
+    pub ray: Ray<T>,
+}
+
+impl<T: Real> NonlinearRay<T> {
+    /// The nonlinear ray of `ray` in `prism`.
+    #[must_use]
+    pub fn new(prism: &Prism<T>, ray: &Ray<T>) -> Self {
+        let [e0, e1] = ray.perpendiculars();
+        let [(a0, a1), (b0, b1)] = prism.edges();
+        let o0 = ray.origin - prism.p[0];
+        let row = |e: T::Vec3| -> [Linear<T>; 3] {
+            [
+                [e.dot(a0), e.dot(a1)],
+                [e.dot(b0), e.dot(b1)],
+                [e.dot(o0), -e.dot(prism.n[0])],
+            ]
+        };
+        let (r0, r1) = (row(e0), row(e1));
+        let ([a, b, r], [c, e, s]) = (r0, r1);
+        // Cramer: d = a e - b c, alpha d = r e - b s, beta d = a s - r c.
+        let d = det_of_linears(a, e, b, c);
+        let alpha = det_of_linears(r, e, b, s);
+        let beta = det_of_linears(a, s, r, c);
+        let [t0, t1, t2] = prism.uv;
+        let (du1, du2) = (t1.x() - t0.x(), t2.x() - t0.x());
+        let (dv1, dv2) = (t1.y() - t0.y(), t2.y() - t0.y());
+        let u =
+            core::array::from_fn(|i| d[i].mul_add(t0.x(), alpha[i].mul_add(du1, beta[i] * du2)));
+        let v =
+            core::array::from_fn(|i| d[i].mul_add(t0.y(), alpha[i].mul_add(dv1, beta[i] * dv2)));
+        Self {
+            alpha,
+            beta,
+            d,
+            u,
+            v,
+            rows: [r0, r1],
+            ray: *ray,
+        }
+    }
+
+    /// Canonical `(alpha, beta)` at height `h` by Eq. 7; `None` where the denominator is 0
+    /// (the ray is parallel to the prism's cross-section there, or that is degenerate).
+    #[must_use]
+    #[inline]
+    pub fn alpha_beta(&self, h: T) -> Option<(T, T)> {
+        let d = quadratic_at(&self.d, h);
+        (d != T::ZERO).then(|| {
+            (
+                quadratic_at(&self.alpha, h) / d,
+                quadratic_at(&self.beta, h) / d,
+            )
+        })
+    }
+
+    /// Texture `(u, v)` at height `h` by Eq. 8; `None` where the denominator is 0.
+    #[must_use]
+    #[inline]
+    pub fn uv(&self, h: T) -> Option<(T, T)> {
+        let d = quadratic_at(&self.d, h);
+        (d != T::ZERO).then(|| (quadratic_at(&self.u, h) / d, quadratic_at(&self.v, h) / d))
+    }
+
+    /// The signed distance along the world ray to the shell point `S(alpha, beta, h)`
+    /// (sec. 4.3: Eq. 5 dotted with the unit direction).
+    #[must_use]
+    #[inline]
+    pub fn signed_distance(&self, prism: &Prism<T>, alpha: T, beta: T, h: T) -> T {
+        self.ray
+            .dir
+            .dot(prism.shell_point(alpha, beta, h) - self.ray.origin)
+    }
+}

@@ -1,0 +1,184 @@
+//! Properties of the shell mapping and nonlinear rays, for f32 and f64 from one macro body.
+//!
+//! Tolerances are stated relative to the unit roundoff `u` of the type and to the size of the
+//! geometry (coordinates are O(1) here); each says why it has its value.
+
+use nlrt_poly::{Real, Vector2, Vector3};
+use nlrt_shellmap::{NonlinearRay, Prism, Ray, TexturePlane, intersect_microtriangle};
+use proptest::prelude::*;
+
+fn config() -> ProptestConfig {
+    let cases = if std::env::var_os("NLRT_EXTENSIVE").is_some() {
+        20_000
+    } else {
+        256
+    };
+    ProptestConfig {
+        cases,
+        failure_persistence: None,
+        ..ProptestConfig::default()
+    }
+}
+
+/// A well-shaped prism: base triangle near the unit right triangle in the xy plane, normals
+/// near +z (tilted by up to 0.3), uvs near the unit triangle.
+fn prism_params() -> impl Strategy<Value = [f64; 24]> {
+    prop::array::uniform24(-1.0f64..1.0)
+}
+
+fn prism_from<T: Real>(r: &[f64; 24]) -> Prism<T> {
+    let v = |x: f64, y: f64, z: f64| T::Vec3::new(T::from_f64(x), T::from_f64(y), T::from_f64(z));
+    let w = |x: f64, y: f64| T::Vec2::new(T::from_f64(x), T::from_f64(y));
+    let j = |i: usize| 0.15 * r[i];
+    Prism::new(
+        [
+            v(j(0), j(1), j(2)),
+            v(1.0 + j(3), j(4), j(5)),
+            v(j(6), 1.0 + j(7), j(8)),
+        ],
+        [
+            v(0.3 * r[9], 0.3 * r[10], 1.0 + 0.2 * r[11]),
+            v(0.3 * r[12], 0.3 * r[13], 1.0 + 0.2 * r[14]),
+            v(0.3 * r[15], 0.3 * r[16], 1.0 + 0.2 * r[17]),
+        ],
+        [
+            w(j(18), j(19)),
+            w(1.0 + j(20), j(21)),
+            w(j(22), 1.0 + j(23)),
+        ],
+    )
+}
+
+fn distance_to_line<T: Real>(ray: &Ray<T>, x: T::Vec3) -> T {
+    let r = x - ray.origin;
+    (r - ray.dir * ray.dir.dot(r)).length()
+}
+
+macro_rules! shellmap_properties {
+    ($($t:ident),*) => {$(
+        mod $t {
+            use super::*;
+            type T = $t;
+            type V3 = <T as Real>::Vec3;
+
+            /// Fig. 4: a base triangle degenerate in uv space, to a point and to a line, still
+            /// gives hits: the ray's texture image is a vertical line (a point) or lies in a
+            /// vertical plane (a line), and Eq. 11 falls back on the two rows of Eq. 6.
+            #[test]
+            fn uv_degenerate_base_triangles_are_hit() {
+                let z = V3::new(0.0, 0.0, 1.0);
+                let base = [V3::new(0.0, 0.0, 0.0), V3::new(1.0, 0.0, 0.0), V3::new(0.0, 1.0, 0.0)];
+                let w = |u: T, v: T| <<T as Real>::Vec2 as Vector2<T>>::new(u, v);
+                let point = [w(0.3, 0.3), w(0.3, 0.3), w(0.3, 0.3)];
+                let line = [w(0.1, 0.3), w(0.5, 0.3), w(0.3, 0.3)];
+                // Height field over texture space: the plane h = 0.2 + 0.5 u.
+                let tri = [V3::new(-1.0, -1.0, -0.3), V3::new(2.0, -1.0, 1.2), V3::new(-1.0, 2.0, -0.3)];
+                for uv in [point, line] {
+                    let prism = Prism::<T>::new(base, [z, z, z], uv);
+                    let ray = Ray::new(V3::new(0.2, 0.25, 3.0), V3::new(0.01, -0.02, -1.0)).unwrap();
+                    let nl = NonlinearRay::new(&prism, &ray);
+                    let hit = intersect_microtriangle(&prism, &nl, &tri, 0.0, 1.0, 0.0, T::INFINITY)
+                        .expect("uv-degenerate prisms are still hit");
+                    let expected_h = 0.2 + 0.5 * hit.u;
+                    let tol = 64.0 * T::UNIT_ROUNDOFF;
+                    assert!((hit.h - expected_h).abs() <= tol, "{hit:?}");
+                    let x = prism.shell_point(hit.alpha, hit.beta, hit.h);
+                    assert!((ray.at(hit.t) - x).length() <= tol * 8.0, "{hit:?}");
+                }
+            }
+
+            proptest! {
+                #![proptest_config(config())]
+
+                /// canonical -> world -> canonical returns a preimage of the world point inside
+                /// the base triangle: the same point, or where the shell folds over itself (these
+                /// prisms can, near h = 1) another canonical point with the same image. Tolerance
+                /// 64 u: the forward map and the cubic's root each cost a few roundings on O(1)
+                /// data.
+                #[test]
+                fn canonical_round_trip(r in prism_params(), a in 0.05f64..0.9, b_frac in 0.05f64..0.95, h in 0.05f64..0.95) {
+                    let b = b_frac * (0.95 - a);
+                    let prism = prism_from::<T>(&r);
+                    let (a, b, h) = (T::from_f64(a), T::from_f64(b), T::from_f64(h));
+                    let x = prism.shell_point(a, b, h);
+                    let c = prism.world_to_canonical(x, 0.0, 1.0).expect("the point is in the prism");
+                    let tol = 64.0 * T::UNIT_ROUNDOFF;
+                    let same = (c.alpha - a).abs() <= tol && (c.beta - b).abs() <= tol && (c.h - h).abs() <= tol;
+                    let image = prism.shell_point(c.alpha, c.beta, c.h);
+                    let inside = c.alpha >= -tol && c.beta >= -tol && c.alpha + c.beta <= 1.0 + tol;
+                    prop_assert!(same || ((image - x).length() <= tol * 4.0 && inside), "{:?} vs ({a}, {b}, {h})", c);
+                }
+
+                /// Every point of a nonlinear ray is on the world ray. Tolerance 256 u / |d(h)|
+                /// relative to the O(1) geometry: alpha and beta are ratios with denominator d(h),
+                /// whose absolute rounding error is a few u.
+                #[test]
+                fn nonlinear_ray_points_are_on_the_ray(r in prism_params(), o in prop::array::uniform3(-2.0f64..2.0), target in prop::array::uniform3(0.0f64..1.0), hs in prop::array::uniform4(0.0f64..1.0)) {
+                    let prism = prism_from::<T>(&r);
+                    let origin = V3::new(T::from_f64(o[0]), T::from_f64(o[1]), T::from_f64(3.0 + o[2]));
+                    let aim = prism.shell_point(T::from_f64(target[0] * 0.5), T::from_f64(target[1] * 0.5), T::from_f64(target[2]));
+                    let ray = Ray::new(origin, aim - origin).expect("non-degenerate ray");
+                    let nl = NonlinearRay::new(&prism, &ray);
+                    let d_scale = nl.d.iter().map(|v| v.abs()).fold(0.0, T::max);
+                    for &h in &hs {
+                        let h = T::from_f64(h);
+                        let d = nl.d[2].mul_add(h, nl.d[1]).mul_add(h, nl.d[0]);
+                        prop_assume!(d.abs() > d_scale * 1e-2);
+                        let (alpha, beta) = nl.alpha_beta(h).unwrap();
+                        let x = prism.shell_point(alpha, beta, h);
+                        let tol = 256.0 * T::UNIT_ROUNDOFF * (d_scale / d.abs()) * (1.0 + alpha.abs() + beta.abs());
+                        prop_assert!(distance_to_line(&ray, x) <= tol, "h {h}: off by {} > {tol}", distance_to_line(&ray, x));
+                        // Texture coordinates agree with Eq. 2-3 of the same (alpha, beta).
+                        let (u, v) = nl.uv(h).unwrap();
+                        let uv = prism.texture_uv(alpha, beta);
+                        prop_assert!((u - uv.x()).abs() <= tol && (v - uv.y()).abs() <= tol);
+                    }
+                }
+
+                /// A ray aimed at a point of a microtriangle hits it: the reported hit lies on the
+                /// ray, on the microtriangle's plane, inside the prism, and no farther than the
+                /// aimed point (a curved surface may be met earlier). Tolerance 1024 u for the
+                /// residuals (a cubic root, Eq. 11 and the shell map on O(1) data); the distance
+                /// along the ray also carries the root's conditioning: the cubic's coefficients
+                /// are built with a few dozen roundings, so h is known to about
+                /// 64 u sum|c_i||h|^i / |p'(h)|, and the world point moves with h at the speed of
+                /// the normals (O(1) here).
+                #[test]
+                fn aimed_rays_hit_microtriangles(r in prism_params(), hs in prop::array::uniform3(0.1f64..0.9), bary in prop::array::uniform2(0.05f64..0.45), o in prop::array::uniform2(-1.0f64..1.0)) {
+                    let prism = prism_from::<T>(&r);
+                    // A microtriangle over the whole base triangle in texture space, tilted in h.
+                    let t = |i: usize, h: f64| {
+                        let uv = prism.uv[i];
+                        V3::new(uv.x(), uv.y(), T::from_f64(h))
+                    };
+                    let tri = [t(0, hs[0]), t(1, hs[1]), t(2, hs[2])];
+                    let (a, b) = (bary[0], bary[1]);
+                    let h = (1.0 - a - b) * hs[0] + a * hs[1] + b * hs[2];
+                    let (a, b, h) = (T::from_f64(a), T::from_f64(b), T::from_f64(h));
+                    let aim = prism.shell_point(a, b, h);
+                    let origin = V3::new(T::from_f64(o[0]), T::from_f64(o[1]), T::from_f64(4.0));
+                    let ray = Ray::new(origin, aim - origin).expect("non-degenerate ray");
+                    let distance = (aim - origin).length();
+                    let nl = NonlinearRay::new(&prism, &ray);
+                    let hit = intersect_microtriangle(&prism, &nl, &tri, 0.0, 1.0, 0.0, T::INFINITY);
+                    let tol = 1024.0 * T::UNIT_ROUNDOFF * 4.0;
+                    let hit = hit.expect("the aimed point is on the microtriangle");
+                    let plane = TexturePlane::<T>::through(&tri).unwrap();
+                    let cubic = plane.ray_cubic(&nl);
+                    let magnitude = nlrt_poly::horner(&cubic.map(T::abs), hit.h.abs());
+                    let slope = nlrt_poly::horner(&[cubic[1], 2.0 * cubic[2], 3.0 * cubic[3]], hit.h).abs();
+                    let h_error = 64.0 * T::UNIT_ROUNDOFF * magnitude / slope;
+                    let t_tol = tol + 4.0 * h_error;
+                    prop_assert!(hit.t <= distance + t_tol, "hit at {} beyond the aimed point at {distance} (tolerance {t_tol})", hit.t);
+                    let x = prism.shell_point(hit.alpha, hit.beta, hit.h);
+                    prop_assert!(distance_to_line(&ray, x) <= tol);
+                    prop_assert!((ray.at(hit.t) - x).length() <= tol);
+                    let q = V3::new(hit.u, hit.v, hit.h);
+                    prop_assert!((plane.normal.dot(q) + plane.k).abs() <= tol);
+                }
+            }
+        }
+    )*};
+}
+
+shellmap_properties!(f32, f64);
