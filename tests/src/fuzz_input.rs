@@ -144,3 +144,42 @@ pub fn fuzz_quadratic<T: Real>(data: &[u8]) {
     let roots = solve_quadratic_in(input.coeffs, input.lo, input.hi);
     check_answer(&input, &roots);
 }
+
+/// The microtriangle fuzz target: a prism (base, normals, uvs), a ray, a texture-space
+/// triangle and a height range, all raw bit patterns. No panic; a reported hit is finite, has
+/// `t` and `h` in their ranges and `(alpha, beta)` in the base triangle; the nonlinear ray's
+/// coefficients are computed without panicking for any input.
+pub fn fuzz_microtriangle<T: Real>(data: &[u8]) {
+    use nlrt_poly::{Vector2, Vector3};
+    use nlrt_shellmap::{NonlinearRay, Prism, Ray, intersect_microtriangle};
+    let x = decode::<T, 38>(data).coeffs;
+    let v3 = |i: usize| T::Vec3::new(x[i], x[i + 1], x[i + 2]);
+    let prism = Prism::<T>::new(
+        [v3(0), v3(3), v3(6)],
+        [v3(9), v3(12), v3(15)],
+        [
+            T::Vec2::new(x[18], x[19]),
+            T::Vec2::new(x[20], x[21]),
+            T::Vec2::new(x[22], x[23]),
+        ],
+    );
+    let Some(ray) = Ray::new(v3(24), v3(27)) else {
+        return;
+    };
+    let tri = [v3(30), v3(33), T::Vec3::new(x[36], x[37], x[30])];
+    let nl = NonlinearRay::new(&prism, &ray);
+    let (h_lo, h_hi) = (T::ZERO, T::ONE);
+    if let Some(hit) = intersect_microtriangle(&prism, &nl, &tri, h_lo, h_hi, T::ZERO, T::INFINITY)
+    {
+        let all = [hit.t, hit.alpha, hit.beta, hit.h, hit.u, hit.v];
+        assert!(all.iter().all(|v| v.is_finite()), "non-finite hit {hit:?}");
+        assert!(
+            hit.t >= T::ZERO && hit.h >= h_lo && hit.h <= h_hi,
+            "hit out of range {hit:?}"
+        );
+        assert!(
+            hit.alpha >= T::ZERO && hit.beta >= T::ZERO && hit.alpha + hit.beta <= T::ONE,
+            "hit outside the prism {hit:?}"
+        );
+    }
+}

@@ -2,7 +2,7 @@
 //! regressions (`fuzz/regressions/<target>/`) through the same checks the fuzz targets run,
 //! so CI exercises what the fuzzer found without a nightly toolchain.
 
-use nlrt_tests::fuzz_input::{fuzz_cubic, fuzz_quadratic};
+use nlrt_tests::fuzz_input::{fuzz_cubic, fuzz_microtriangle, fuzz_quadratic};
 use std::path::PathBuf;
 
 fn replay(target: &str, run: fn(&[u8])) {
@@ -45,6 +45,16 @@ fn replay_quadratic_f32() {
 #[test]
 fn replay_quadratic_f64() {
     replay("quadratic_f64", fuzz_quadratic::<f64>);
+}
+
+#[test]
+fn replay_microtriangle_f32() {
+    replay("microtriangle_f32", fuzz_microtriangle::<f32>);
+}
+
+#[test]
+fn replay_microtriangle_f64() {
+    replay("microtriangle_f64", fuzz_microtriangle::<f64>);
 }
 
 /// Writes the seed corpus from the hard families (run once by hand:
