@@ -5,7 +5,7 @@
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use nlrt_poly::{Real, Vector2, Vector3, solve_cubic_in};
-use nlrt_shellmap::{NonlinearRay, Prism, Ray, intersect_microtriangle};
+use nlrt_shellmap::{NonlinearRay, Prism, Ray, intersect_box, intersect_microtriangle};
 use std::hint::black_box;
 
 const N: usize = 4096;
@@ -128,6 +128,30 @@ fn bench_type<T: Real>(c: &mut Criterion) {
                         T::INFINITY,
                     )
                     .is_some()
+                })
+                .count()
+        })
+    });
+    // A texel-sized box (64 x 64 grid) around the microtriangle, heights [0.3, 0.7].
+    let boxes: Vec<([T; 3], [T; 3])> = s
+        .tris
+        .iter()
+        .map(|t| {
+            let texel = T::from_f64(1.0 / 64.0);
+            (
+                [t[0].x(), t[0].y(), T::from_f64(0.3)],
+                [t[0].x() + texel, t[0].y() + texel, T::from_f64(0.7)],
+            )
+        })
+        .collect();
+    g.bench_function(BenchmarkId::from_parameter("texture_aabb"), |b| {
+        b.iter(|| {
+            s.prisms
+                .iter()
+                .zip(&rays)
+                .zip(&boxes)
+                .filter(|((p, r), (lo, hi))| {
+                    intersect_box(p, r, black_box(*lo), *hi, T::ZERO, T::INFINITY).is_some()
                 })
                 .count()
         })

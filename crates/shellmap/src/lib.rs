@@ -18,8 +18,8 @@
 //! assert!((hit.t - 2.5).abs() < 1e-12 && (hit.h - 0.5).abs() < 1e-12);
 //! ```
 //!
-//! Work in progress: the texture-space AABB test, the ray-prism test and the flat shortcuts
-//! are still to come.
+//! Work in progress: the ray-prism test (bilinear side patches), the flat shortcuts and the
+//! oracle-backed hard cases are still to come.
 #![no_std]
 #![warn(missing_docs)]
 // `!(a <= b)` is deliberate: it is true when either side is NaN.
@@ -28,10 +28,12 @@
 #[cfg(not(any(feature = "std", feature = "libm")))]
 compile_error!("nlrt-shellmap needs the `std` or the `libm` feature");
 
+mod aabb;
 mod microtriangle;
 mod prism;
 mod ray;
 
+pub use aabb::{BoxSpan, intersect_box};
 pub use microtriangle::{
     Hit, TexturePlane, alpha_beta_eq11, inside_triangle, intersect_microtriangle, world_normal,
 };

@@ -1,0 +1,132 @@
+//! Nonlinear ray against an axis-aligned box in texture space (Ogaki 2023, sec. 4.4): where the
+//! curve `h -> (u(h), v(h), h)` is inside `[u_lo, u_hi] x [v_lo, v_hi] x [h_lo, h_hi]`.
+
+use crate::prism::Prism;
+use crate::ray::NonlinearRay;
+use nlrt_poly::{Real, solve_quadratic_in};
+
+/// Where a nonlinear ray is inside a texture-space box: the range of heights and the range of
+/// distances along the world ray that the accelerators use for ordering and range reduction.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BoxSpan<T> {
+    /// Smallest height inside.
+    pub h_in: T,
+    /// Largest height inside.
+    pub h_out: T,
+    /// Smallest distance along the ray inside (sampled; see [`intersect_box`]).
+    pub t_in: T,
+    /// Largest distance along the ray inside (sampled; see [`intersect_box`]).
+    pub t_out: T,
+}
+
+/// Most candidate heights: the two `h` faces, two roots for each of the four `u`/`v` faces and
+/// two for the denominator's zeros.
+const MAX_CANDIDATES: usize = 12;
+
+/// Where `ray` is inside the texture-space box `lo..=hi` (each `(u, v, h)`), with the distance
+/// along the world ray in `[t_min, t_max]`; `None` when it never is.
+///
+/// The `u` and `v` faces are met where `U(h) - u_face D(h) = 0`, a quadratic (Eq. 8 with the
+/// denominator cleared); the `h` faces are the ends of the height range. Between consecutive
+/// such heights (and the denominator's zeros) the curve is entirely inside or entirely
+/// outside, so testing each candidate and each midpoint decides it exactly up to rounding.
+/// At a zero of the denominator the ray runs parallel to the prism's cross-section (its height
+/// is constant over a stretch of the ray): that height is kept as inside with the whole
+/// `[t_min, t_max]`, which is conservative. `t_in`/`t_out` are the extremes over the inside
+/// samples (candidates, the ends of inside pieces, their midpoints), not a bound over the whole
+/// inside curve.
+#[must_use]
+pub fn intersect_box<T: Real>(
+    prism: &Prism<T>,
+    ray: &NonlinearRay<T>,
+    lo: [T; 3],
+    hi: [T; 3],
+    t_min: T,
+    t_max: T,
+) -> Option<BoxSpan<T>> {
+    let (h_lo, h_hi) = (lo[2], hi[2]);
+    if !(h_lo <= h_hi && lo[0] <= hi[0] && lo[1] <= hi[1]) {
+        return None;
+    }
+    let mut candidates = [T::ZERO; MAX_CANDIDATES];
+    let mut n = 0;
+    let mut push = |h: T| {
+        candidates[n] = h;
+        n += 1;
+    };
+    push(h_lo);
+    push(h_hi);
+    let d = &ray.d;
+    let faces = [
+        (&ray.u, lo[0]),
+        (&ray.u, hi[0]),
+        (&ray.v, lo[1]),
+        (&ray.v, hi[1]),
+    ];
+    for (num, face) in faces {
+        let q = [
+            (-face).mul_add(d[0], num[0]),
+            (-face).mul_add(d[1], num[1]),
+            (-face).mul_add(d[2], num[2]),
+        ];
+        for &h in solve_quadratic_in(q, h_lo, h_hi).iter() {
+            push(h);
+        }
+    }
+    let poles = solve_quadratic_in(*d, h_lo, h_hi);
+    for &h in poles.iter() {
+        push(h);
+    }
+    let candidates = &mut candidates[..n];
+    candidates.sort_unstable_by(|a, b| a.partial_cmp(b).unwrap_or(core::cmp::Ordering::Equal));
+
+    let mut span: Option<BoxSpan<T>> = None;
+    let mut include = |h: T, t_lo: T, t_hi: T| {
+        let s = span.get_or_insert(BoxSpan {
+            h_in: h,
+            h_out: h,
+            t_in: t_lo,
+            t_out: t_hi,
+        });
+        s.h_in = s.h_in.min(h);
+        s.h_out = s.h_out.max(h);
+        s.t_in = s.t_in.min(t_lo);
+        s.t_out = s.t_out.max(t_hi);
+    };
+    for &h in poles.iter() {
+        include(h, t_min, t_max);
+    }
+    // The distance along the ray at height h, when the curve is defined there.
+    let distance = |h: T| {
+        ray.alpha_beta(h)
+            .map(|(alpha, beta)| ray.signed_distance(prism, alpha, beta, h))
+    };
+    let inside = |h: T| {
+        ray.uv(h)
+            .is_some_and(|(u, v)| u >= lo[0] && u <= hi[0] && v >= lo[1] && v <= hi[1])
+    };
+    let in_range = |t: T| t >= t_min && t <= t_max;
+    for i in 0..candidates.len() {
+        let c = candidates[i];
+        if inside(c)
+            && let Some(t) = distance(c).filter(|&t| in_range(t))
+        {
+            include(c, t, t);
+        }
+        // Between consecutive candidates inside-ness cannot change, so an inside midpoint
+        // puts the whole piece inside, ends included (they lie on faces, where rounding
+        // alone could put them out).
+        if i + 1 < candidates.len() {
+            let next = candidates[i + 1];
+            let mid = (c + next) * T::HALF;
+            if inside(mid) {
+                for h in [c, mid, next] {
+                    if let Some(t) = distance(h).filter(|&t| in_range(t)) {
+                        include(h, t, t);
+                    }
+                }
+            }
+        }
+    }
+    span
+}
