@@ -5,7 +5,9 @@
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use nlrt_poly::{Real, Vector2, Vector3, solve_cubic_in};
-use nlrt_shellmap::{NonlinearRay, Prism, Ray, intersect_box, intersect_microtriangle};
+use nlrt_shellmap::{
+    NonlinearRay, Prism, Ray, intersect_box, intersect_microtriangle, intersect_prism,
+};
 use std::hint::black_box;
 
 const N: usize = 4096;
@@ -153,6 +155,15 @@ fn bench_type<T: Real>(c: &mut Criterion) {
                 .filter(|((p, r), (lo, hi))| {
                     intersect_box(p, r, black_box(*lo), *hi, T::ZERO, T::INFINITY).is_some()
                 })
+                .count()
+        })
+    });
+    g.bench_function(BenchmarkId::from_parameter("ray_vs_prism"), |b| {
+        b.iter(|| {
+            s.prisms
+                .iter()
+                .zip(&s.rays)
+                .filter(|(p, r)| intersect_prism(black_box(p), r, T::ZERO, T::INFINITY).is_some())
                 .count()
         })
     });

@@ -18,8 +18,8 @@
 //! assert!((hit.t - 2.5).abs() < 1e-12 && (hit.h - 0.5).abs() < 1e-12);
 //! ```
 //!
-//! Work in progress: the ray-prism test (bilinear side patches), the flat shortcuts and the
-//! oracle-backed hard cases are still to come.
+//! Work in progress: the flat shortcuts (sec. 5.4), the oracle-backed hard cases and the
+//! high-precision versions of these operations are still to come.
 #![no_std]
 #![warn(missing_docs)]
 // `!(a <= b)` is deliberate: it is true when either side is NaN.
@@ -31,6 +31,7 @@ compile_error!("nlrt-shellmap needs the `std` or the `libm` feature");
 mod aabb;
 mod microtriangle;
 mod prism;
+mod prism_hit;
 mod ray;
 
 pub use aabb::{BoxSpan, intersect_box};
@@ -38,4 +39,5 @@ pub use microtriangle::{
     Hit, TexturePlane, alpha_beta_eq11, inside_triangle, intersect_microtriangle, world_normal,
 };
 pub use prism::{Canonical, Prism};
+pub use prism_hit::{PrismSpan, intersect_prism};
 pub use ray::{NonlinearRay, Ray};
