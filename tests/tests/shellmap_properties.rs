@@ -198,6 +198,32 @@ macro_rules! shellmap_properties {
                     prop_assert!(span.t_in == 0.0 && (!folded || preimage.is_some()), "{span:?}");
                 }
 
+                /// The flat shortcut agrees with the cubic path: a flat microtriangle and the
+                /// same triangle tilted by 2^-20 in h (which takes the cubic) give hits within
+                /// the tilt's effect of each other, and the flat hit lies on the aimed ray.
+                #[test]
+                fn flat_shortcut_agrees_with_the_cubic(r in prism_params(), h in 0.1f64..0.9, bary in prop::array::uniform2(0.05f64..0.45), o in prop::array::uniform2(-1.0f64..1.0)) {
+                    let prism = prism_with_tilt::<T>(&r, 0.1);
+                    let t = |i: usize, dh: f64| {
+                        let uv = prism.uv[i];
+                        V3::new(uv.x(), uv.y(), T::from_f64(h + dh))
+                    };
+                    let flat = [t(0, 0.0), t(1, 0.0), t(2, 0.0)];
+                    let tilt = 2f64.powi(-20);
+                    let tilted = [t(0, 0.0), t(1, tilt), t(2, 0.0)];
+                    let aim = prism.shell_point(T::from_f64(bary[0]), T::from_f64(bary[1]), T::from_f64(h));
+                    let origin = V3::new(T::from_f64(o[0]), T::from_f64(o[1]), T::from_f64(4.0));
+                    let ray = Ray::new(origin, aim - origin).expect("non-degenerate ray");
+                    let nl = NonlinearRay::new(&prism, &ray);
+                    let a = intersect_microtriangle(&prism, &nl, &flat, 0.0, 1.0, 0.0, T::INFINITY).expect("flat hit");
+                    let b = intersect_microtriangle(&prism, &nl, &tilted, 0.0, 1.0, 0.0, T::INFINITY).expect("tilted hit");
+                    // The tilt moves the surface by at most 2^-20 in h; rays here cross it at an
+                    // angle, so hits move by O(2^-20) too (times 8 for the slant), plus rounding.
+                    let tol = 8.0 * T::from_f64(tilt) + 1024.0 * T::UNIT_ROUNDOFF;
+                    prop_assert!((a.t - b.t).abs() <= tol && (a.h - b.h).abs() <= tol, "{a:?} vs {b:?}");
+                    prop_assert!((ray.at(a.t) - prism.shell_point(a.alpha, a.beta, a.h)).length() <= 256.0 * T::UNIT_ROUNDOFF * 4.0);
+                }
+
                 /// A ray aimed at a point of a microtriangle hits it: the reported hit lies on the
                 /// ray, on the microtriangle's plane, inside the prism, and no farther than the
                 /// aimed point (a curved surface may be met earlier). Tolerance 1024 u for the

@@ -18,7 +18,7 @@
 //! assert!((hit.t - 2.5).abs() < 1e-12 && (hit.h - 0.5).abs() < 1e-12);
 //! ```
 //!
-//! Work in progress: the flat shortcuts (sec. 5.4), the oracle-backed hard cases and the
+//! Work in progress: the flat-texel shortcut, the oracle-backed hard cases and the
 //! high-precision versions of these operations are still to come.
 #![no_std]
 #![warn(missing_docs)]
@@ -36,7 +36,8 @@ mod ray;
 
 pub use aabb::{BoxSpan, intersect_box};
 pub use microtriangle::{
-    Hit, TexturePlane, alpha_beta_eq11, inside_triangle, intersect_microtriangle, world_normal,
+    Hit, TexturePlane, alpha_beta_eq11, inside_triangle, intersect_flat_microtriangle,
+    intersect_microtriangle, world_normal,
 };
 pub use prism::{Canonical, Prism};
 pub use prism_hit::{PrismSpan, intersect_prism};

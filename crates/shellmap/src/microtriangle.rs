@@ -137,10 +137,55 @@ pub fn inside_triangle<T: Real>(tri: &[T::Vec3; 3], normal: T::Vec3, q: T::Vec3)
         || (w0 <= T::ZERO && w1 <= T::ZERO && w2 <= T::ZERO)
 }
 
+/// The hit of the world ray on a flat microtriangle (all three vertices at height `h`), the
+/// shortcut of sec. 5.4: at constant `h` the microtriangle lies in the prism's cross-section
+/// `S_0(h) S_1(h) S_2(h)`, a flat world-space triangle, so a rectilinear ray-plane test and
+/// barycentric coordinates replace the cubic. Inside-ness is still decided in texture space,
+/// so a base triangle degenerate in uv is handled as in the general test. `None` when the ray
+/// is parallel to the cross-section or the cross-section is degenerate.
+#[must_use]
+pub fn intersect_flat_microtriangle<T: Real>(
+    prism: &Prism<T>,
+    ray: &NonlinearRay<T>,
+    tri: &[T::Vec3; 3],
+    t_min: T,
+    t_max: T,
+) -> Option<Hit<T>> {
+    let h = tri[0].z();
+    let s0 = prism.vertex(0, h);
+    let (e0, e1) = (prism.vertex(1, h) - s0, prism.vertex(2, h) - s0);
+    let n = e0.cross(e1);
+    let w = ray.ray.dir;
+    let denom = n.dot(w);
+    if denom == T::ZERO || !denom.is_finite() {
+        return None;
+    }
+    let t = n.dot(s0 - ray.ray.origin) / denom;
+    if !(t >= t_min && t <= t_max) {
+        return None;
+    }
+    let (alpha, beta) = crate::prism::barycentric_in_plane::<T>(s0, e0, e1, ray.ray.at(t))?;
+    if !(alpha >= T::ZERO && beta >= T::ZERO && alpha + beta <= T::ONE) {
+        return None;
+    }
+    let uv = prism.texture_uv(alpha, beta);
+    let q = T::Vec3::new(nlrt_poly::Vector2::x(uv), nlrt_poly::Vector2::y(uv), h);
+    let normal = T::Vec3::new(T::ZERO, T::ZERO, T::ONE); // the microtriangle's plane is h = const
+    inside_triangle::<T>(tri, normal, q).then_some(Hit {
+        t,
+        alpha,
+        beta,
+        h,
+        u: q.x(),
+        v: q.y(),
+    })
+}
+
 /// The nearest hit with `t` in `[t_min, t_max]` of a nonlinear ray on a texture-space
 /// microtriangle `tri` (vertices `(u, v, h)`), with `h` restricted to `[h_lo, h_hi]` (the
 /// ray's height range in the prism). Every root of the plane cubic in the range is tried:
-/// along a curved ray the smallest `h` need not be the nearest hit.
+/// along a curved ray the smallest `h` need not be the nearest hit. A flat microtriangle (all
+/// vertices at one height) takes [`intersect_flat_microtriangle`].
 #[must_use]
 pub fn intersect_microtriangle<T: Real>(
     prism: &Prism<T>,
@@ -151,6 +196,13 @@ pub fn intersect_microtriangle<T: Real>(
     t_min: T,
     t_max: T,
 ) -> Option<Hit<T>> {
+    let h0 = tri[0].z();
+    if tri[1].z() == h0 && tri[2].z() == h0 {
+        if !(h0 >= h_lo && h0 <= h_hi) {
+            return None;
+        }
+        return intersect_flat_microtriangle(prism, ray, tri, t_min, t_max);
+    }
     let plane = TexturePlane::through(tri)?;
     let plane_abh = plane.canonical(prism);
     let mut best: Option<Hit<T>> = None;
