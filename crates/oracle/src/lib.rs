@@ -10,12 +10,14 @@
 //! - [`Truth::judge`]: a solver's answer measured against them: error in ulps of the target
 //!   type, missed roots, spurious roots, with tolerances scaled by each root's conditioning.
 //! - [`families`]: the hard cubic families and random generators shared by tests and reports.
+//! - [`shell`]: the true hit of a world ray on a microtriangle of a prism (Ogaki 2023, Eq. 1-11).
 //!
 //! Building it needs GMP's build tools (`m4`); the project's test script installs them.
 
 pub mod exact;
 pub mod families;
 pub mod measure;
+pub mod shell;
 
 pub use exact::{ExactPoly, ROOT_BITS, RealRoot};
 pub use measure::{Tolerance, Truth, Verdict, judge, ulp};

@@ -1,0 +1,171 @@
+//! Microtriangle hits in f32 and f64 against the MPFR oracle's true hit, on microtriangles of
+//! texel size 1/64, 1/4096 and 1/65536 (where n_uvh is tiny and the paper's normalization
+//! matters).
+//!
+//! Tolerance on the distance: 1024 u (the shell map on O(1) data) plus four times the
+//! root's attainable error, 64 u sum|c_i||h|^i / |p'(h)| for the plane cubic `p` as the
+//! tracer computed it (its coefficients carry a few dozen roundings).
+
+use nlrt_oracle::shell::{ShellScene, true_microtriangle_hit};
+use nlrt_poly::{Real, Vector2, Vector3};
+use nlrt_shellmap::{NonlinearRay, Prism, Ray, TexturePlane, intersect_microtriangle};
+use proptest::prelude::*;
+
+fn config() -> ProptestConfig {
+    let cases = if std::env::var_os("NLRT_EXTENSIVE").is_some() {
+        2_000
+    } else {
+        64
+    };
+    ProptestConfig {
+        cases,
+        failure_persistence: None,
+        ..ProptestConfig::default()
+    }
+}
+
+fn v3<T: Real>(v: T::Vec3) -> [f64; 3] {
+    [v.x().to_f64(), v.y().to_f64(), v.z().to_f64()]
+}
+
+fn check<T: Real>(
+    r: &[f64; 12],
+    texel: f64,
+    corner: [f64; 2],
+    bary: [f64; 2],
+    heights: [f64; 3],
+    o: [f64; 2],
+) -> Result<(), TestCaseError> {
+    let v = |x: f64, y: f64, z: f64| T::Vec3::new(T::from_f64(x), T::from_f64(y), T::from_f64(z));
+    let w = |x: f64, y: f64| T::Vec2::new(T::from_f64(x), T::from_f64(y));
+    // Unit uvs: alpha = u, beta = v. Gently tilted normals (an unfolded prism).
+    let prism = Prism::<T>::new(
+        [
+            v(0.1 * r[0], 0.1 * r[1], 0.0),
+            v(1.0, 0.1 * r[2], 0.1 * r[3]),
+            v(0.1 * r[4], 1.0, 0.1 * r[5]),
+        ],
+        [
+            v(0.1 * r[6], 0.1 * r[7], 1.0),
+            v(0.1 * r[8], 0.1 * r[9], 1.0),
+            v(0.1 * r[10], 0.1 * r[11], 1.0),
+        ],
+        [w(0.0, 0.0), w(1.0, 0.0), w(0.0, 1.0)],
+    );
+    let (u0, v0) = (corner[0] * 0.5, corner[1] * 0.5);
+    let tri = [
+        v(u0, v0, heights[0]),
+        v(u0 + texel, v0, heights[1]),
+        v(u0, v0 + texel, heights[2]),
+    ];
+    // Aim at an interior point of the microtriangle (margins of at least 0.2 x 0.2 = 0.04 in
+    // its barycentrics).
+    let (a, b) = (bary[0], bary[1]);
+    let (u, vv) = (u0 + a * texel, v0 + b * texel);
+    let h = (1.0 - a - b) * heights[0] + a * heights[1] + b * heights[2];
+    let aim = prism.shell_point(T::from_f64(u), T::from_f64(vv), T::from_f64(h));
+    let origin = v(o[0], o[1], 4.0);
+    let ray = Ray::new(origin, aim - origin).expect("non-degenerate ray");
+    let nl = NonlinearRay::new(&prism, &ray);
+    let ours = intersect_microtriangle(&prism, &nl, &tri, T::ZERO, T::ONE, T::ZERO, T::INFINITY);
+    let scene = ShellScene {
+        p: prism.p.map(v3::<T>),
+        n: prism.n.map(v3::<T>),
+        uv: prism.uv.map(|t| [t.x().to_f64(), t.y().to_f64()]),
+        origin: v3::<T>(ray.origin),
+        dir: v3::<T>(ray.dir),
+        tri: tri.map(v3::<T>),
+    };
+    // The aimed point is computed in T: for f32 and the smallest texels its rounding (and the
+    // rounding of the normalized direction) can move the exact ray off the microtriangle. The
+    // claim is about rays the oracle says hit.
+    let truth = true_microtriangle_hit(&scene, 0.0, 1.0, 0.0);
+    prop_assert!(
+        truth.is_some() || T::MANTISSA_DIGITS == 24,
+        "f64: the oracle misses the aimed interior point"
+    );
+    let Some(truth) = truth else { return Ok(()) };
+    let ours = ours
+        .ok_or_else(|| TestCaseError::fail(format!("{}: missed hit, truth {truth:?}", T::NAME)))?;
+    let plane = TexturePlane::<T>::through(&tri).unwrap();
+    let cubic = plane.ray_cubic(&nl);
+    let magnitude = nlrt_poly::horner(&cubic.map(T::abs), ours.h.abs());
+    let slope =
+        nlrt_poly::horner(&[cubic[1], T::TWO * cubic[2], T::THREE * cubic[3]], ours.h).abs();
+    let u_f = T::UNIT_ROUNDOFF.to_f64();
+    let h_error = 64.0 * u_f * (magnitude / slope).to_f64();
+    let tol = 1024.0 * u_f * 4.0 + 4.0 * h_error;
+    let err = (ours.t.to_f64() - truth.t).abs();
+    prop_assert!(
+        err <= tol,
+        "{}: t {} vs true {} (error {err:e} > {tol:e}), texel {texel}",
+        T::NAME,
+        ours.t,
+        truth.t
+    );
+    Ok(())
+}
+
+macro_rules! oracle_properties {
+    ($($t:ident: $texels:expr),*) => {$(
+        mod $t {
+            use super::*;
+            proptest! {
+                #![proptest_config(config())]
+                #[test]
+                fn microtriangle_hits_match_the_oracle(
+                    r in prop::array::uniform12(-1.0f64..1.0),
+                    texel in prop::sample::select($texels),
+                    corner in prop::array::uniform2(0.05f64..0.5),
+                    a in 0.2f64..0.6,
+                    b_frac in 0.2f64..0.8,
+                    heights in prop::array::uniform3(0.2f64..0.8),
+                    o in prop::array::uniform2(-1.0f64..1.0),
+                ) {
+                    let b = b_frac * (0.8 - a);
+                    check::<$t>(&r, texel, corner, [a, b], heights, o)?;
+                }
+            }
+        }
+    )*};
+}
+
+// f32 disagrees with the oracle on a small fraction of rays (missed hits on tiny texels, an
+// earlier hit than the true one): measured, not asserted, by `f32_disagreement_rates`, until
+// the microtriangle test is made robust in f32 (open work of the shellmap issue).
+oracle_properties!(f64: vec![1.0 / 64.0, 1.0 / 4096.0, 1.0 / 65536.0]);
+
+/// Measures (does not assert) how often f32 disagrees with the oracle, per texel size:
+/// `cargo test --release -p nlrt-tests --test shellmap_oracle -- --ignored --nocapture`.
+#[test]
+#[ignore]
+fn f32_disagreement_rates() {
+    let mut state = 12345u64;
+    let mut unit = || {
+        state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = state;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+    };
+    for texel in [1.0 / 64.0, 1.0 / 4096.0, 1.0 / 65536.0] {
+        let (mut hits, mut misses, mut errors) = (0, 0, 0);
+        for _ in 0..20_000 {
+            let r: [f64; 12] = std::array::from_fn(|_| 2.0 * unit() - 1.0);
+            let corner = [0.05 + 0.45 * unit(), 0.05 + 0.45 * unit()];
+            let a = 0.2 + 0.4 * unit();
+            let b = (0.2 + 0.6 * unit()) * (0.8 - a);
+            let heights = [0.2 + 0.6 * unit(), 0.2 + 0.6 * unit(), 0.2 + 0.6 * unit()];
+            let o = [2.0 * unit() - 1.0, 2.0 * unit() - 1.0];
+            match check::<f32>(&r, texel, corner, [a, b], heights, o) {
+                Err(e) if e.to_string().contains("oracle misses") => {}
+                Ok(()) => hits += 1,
+                Err(e) if e.to_string().contains("missed") => misses += 1,
+                Err(_) => errors += 1,
+            }
+        }
+        println!(
+            "f32 texel {texel:e}: {hits} agree, {misses} missed, {errors} distance errors over tolerance"
+        );
+    }
+}
