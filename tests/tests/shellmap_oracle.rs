@@ -140,14 +140,8 @@ oracle_properties!(f64: vec![1.0 / 64.0, 1.0 / 4096.0, 1.0 / 65536.0]);
 #[test]
 #[ignore]
 fn f32_disagreement_rates() {
-    let mut state = 12345u64;
-    let mut unit = || {
-        state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = state;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-    };
+    let mut rng = nlrt_oracle::families::SplitMix64::new(12345);
+    let mut unit = || rng.unit();
     for texel in [1.0 / 64.0, 1.0 / 4096.0, 1.0 / 65536.0] {
         let (mut hits, mut misses, mut errors) = (0, 0, 0);
         for _ in 0..20_000 {

@@ -4,6 +4,7 @@
 //! `cargo bench -p nlrt-shellmap --bench shellmap`
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
+use nlrt_oracle::families::SplitMix64;
 use nlrt_poly::{Real, Vector2, Vector3, solve_cubic_in};
 use nlrt_shellmap::{
     NonlinearRay, Prism, Ray, intersect_box, intersect_microtriangle, intersect_prism,
@@ -12,15 +13,6 @@ use std::hint::black_box;
 
 const N: usize = 4096;
 
-/// Deterministic pseudo-random numbers in [0, 1) (SplitMix64).
-fn unit(state: &mut u64) -> f64 {
-    *state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
-    let mut z = *state;
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-}
-
 struct Setup<T: Real> {
     prisms: Vec<Prism<T>>,
     rays: Vec<Ray<T>>,
@@ -28,8 +20,8 @@ struct Setup<T: Real> {
 }
 
 fn setup<T: Real>() -> Setup<T> {
-    let mut s = 7u64;
-    let mut r = |scale: f64| T::from_f64(scale * (unit(&mut s) - 0.5));
+    let mut rng = SplitMix64::new(7);
+    let mut r = |scale: f64| T::from_f64(scale * (rng.unit() - 0.5));
     let mut prisms = Vec::new();
     let mut rays = Vec::new();
     let mut tris = Vec::new();
