@@ -152,20 +152,8 @@ pub fn intersect_flat_microtriangle<T: Real>(
     t_max: T,
 ) -> Option<Hit<T>> {
     let h = tri[0].z();
-    let s0 = prism.vertex(0, h);
-    let (e0, e1) = (prism.vertex(1, h) - s0, prism.vertex(2, h) - s0);
-    let n = e0.cross(e1);
-    let w = ray.ray.dir;
-    let denom = n.dot(w);
-    if denom == T::ZERO || !denom.is_finite() {
-        return None;
-    }
-    let t = n.dot(s0 - ray.ray.origin) / denom;
+    let (t, alpha, beta) = prism.cross_section_hit(&ray.ray, h)?;
     if !(t >= t_min && t <= t_max) {
-        return None;
-    }
-    let (alpha, beta) = crate::prism::barycentric_in_plane::<T>(s0, e0, e1, ray.ray.at(t))?;
-    if !(alpha >= T::ZERO && beta >= T::ZERO && alpha + beta <= T::ONE) {
         return None;
     }
     let uv = prism.texture_uv(alpha, beta);

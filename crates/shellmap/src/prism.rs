@@ -114,6 +114,25 @@ impl<T: Real> Prism<T> {
     }
 }
 
+impl<T: Real> Prism<T> {
+    /// Where a world ray crosses the prism's cross-section at height `h` (the flat triangle
+    /// `S_0(h) S_1(h) S_2(h)`, Eq. 1 at constant `h`) inside the base triangle: `(t, alpha,
+    /// beta)`. `None` when the ray is parallel to it, it is degenerate, or the crossing is
+    /// outside. The prism's caps and the flat-microtriangle shortcut both use it.
+    #[must_use]
+    pub fn cross_section_hit(&self, ray: &crate::Ray<T>, h: T) -> Option<(T, T, T)> {
+        let s0 = self.vertex(0, h);
+        let (e0, e1) = (self.vertex(1, h) - s0, self.vertex(2, h) - s0);
+        let denom = e0.cross(e1).dot(ray.dir);
+        if denom == T::ZERO || !denom.is_finite() {
+            return None;
+        }
+        let t = e0.cross(e1).dot(s0 - ray.origin) / denom;
+        let (alpha, beta) = barycentric_in_plane::<T>(s0, e0, e1, ray.at(t))?;
+        (alpha >= T::ZERO && beta >= T::ZERO && alpha + beta <= T::ONE).then_some((t, alpha, beta))
+    }
+}
+
 /// `(alpha, beta)` with `x = s0 + alpha e0 + beta e1`, from the two coordinate equations whose
 /// 2x2 determinant is largest in magnitude (the three equations of Eq. 1 hold together when `x`
 /// lies in the plane; the best-conditioned pair is the robust choice, as in Eq. 11). `None` when

@@ -2,7 +2,7 @@
 //! three sides, each a bilinear patch in `(s, h)` (Ogaki 2023, sec. 4.4 and 5.4: the entry and
 //! exit distances and heights that range reduction needs).
 
-use crate::prism::{Prism, barycentric_in_plane};
+use crate::prism::Prism;
 use crate::ray::Ray;
 use nlrt_poly::{Real, Vector3, solve_quadratic_in};
 
@@ -59,21 +59,9 @@ fn side_crossings<T: Real>(
     }
 }
 
-/// Crossing of the ray with the triangle `S_0(h), S_1(h), S_2(h)` at a fixed height.
+/// Crossing of the ray with the cap at height `h` (see [`Prism::cross_section_hit`]).
 fn cap_crossing<T: Real>(prism: &Prism<T>, ray: &Ray<T>, h: T, out: &mut impl FnMut(T, T)) {
-    let s0 = prism.vertex(0, h);
-    let (e0, e1) = (prism.vertex(1, h) - s0, prism.vertex(2, h) - s0);
-    let n = e0.cross(e1);
-    let denom = n.dot(ray.dir);
-    if denom == T::ZERO || !denom.is_finite() {
-        return;
-    }
-    let t = n.dot(s0 - ray.origin) / denom;
-    if let Some((alpha, beta)) = barycentric_in_plane::<T>(s0, e0, e1, ray.at(t))
-        && alpha >= T::ZERO
-        && beta >= T::ZERO
-        && alpha + beta <= T::ONE
-    {
+    if let Some((t, _, _)) = prism.cross_section_hit(ray, h) {
         out(t, h);
     }
 }
