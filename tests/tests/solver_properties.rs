@@ -19,9 +19,16 @@ fn config() -> ProptestConfig {
             .and_then(|v| v.parse().ok())
             .unwrap_or(256)
     };
+    // A fixed seed keeps CI reproducible; extensive runs explore new inputs each time.
+    let rng_seed = if std::env::var_os("NLRT_EXTENSIVE").is_some() {
+        proptest::test_runner::RngSeed::Random
+    } else {
+        proptest::test_runner::RngSeed::Fixed(0x6e6c_7274)
+    };
     ProptestConfig {
         cases,
         failure_persistence: None,
+        rng_seed,
         ..ProptestConfig::default()
     }
 }
