@@ -278,3 +278,74 @@ macro_rules! shellmap_properties {
 }
 
 shellmap_properties!(f32, f64);
+
+/// Named hard cases of the shellmap issue with known answers, f32 and f64.
+mod hard_cases {
+    use super::*;
+
+    macro_rules! hard_cases {
+        ($($t:ident),*) => {$(
+            mod $t {
+                use super::*;
+                type T = $t;
+                type V3 = <T as Real>::Vec3;
+
+                fn unit_prism() -> Prism<T> {
+                    let z = V3::new(0.0, 0.0, 1.0);
+                    let w = |u: T, v: T| <<T as Real>::Vec2 as Vector2<T>>::new(u, v);
+                    Prism::new(
+                        [V3::new(0.0, 0.0, 0.0), V3::new(1.0, 0.0, 0.0), V3::new(0.0, 1.0, 0.0)],
+                        [z, z, z],
+                        [w(0.0, 0.0), w(1.0, 0.0), w(0.0, 1.0)],
+                    )
+                }
+
+                /// A ray parallel to the h planes (h_in = h_out): Eq. 6's determinant vanishes
+                /// at the ray's height (Fig. 5), and Eq. 11's plane row must give alpha, beta.
+                /// The microtriangle h = 0.2 + 0.5 u meets the ray at height 0.45 at u = 0.5.
+                #[test]
+                fn ray_parallel_to_h_planes() {
+                    let prism = unit_prism();
+                    let tri = [V3::new(-1.0, -1.0, -0.3), V3::new(2.0, -1.0, 1.2), V3::new(-1.0, 2.0, -0.3)];
+                    let ray = Ray::new(V3::new(-1.0, 0.2, 0.45), V3::new(1.0, 0.0, 0.0)).unwrap();
+                    let nl = NonlinearRay::new(&prism, &ray);
+                    assert!(nl.alpha_beta(0.45).is_none() || nl.d.iter().all(|d| d.abs() < 1e-3), "Eq. 6 is singular here: {:?}", nl.d);
+                    let hit = intersect_microtriangle(&prism, &nl, &tri, 0.0, 1.0, 0.0, T::INFINITY).expect("hit");
+                    let tol = 64.0 * T::UNIT_ROUNDOFF;
+                    assert!((hit.h - 0.45).abs() <= tol && (hit.alpha - 0.5).abs() <= tol && (hit.beta - 0.2).abs() <= tol, "{hit:?}");
+                    assert!((hit.t - 1.5).abs() <= 4.0 * tol, "{hit:?}");
+                }
+
+                /// A ray starting inside the prism hits the microtriangle ahead of it, and the
+                /// prism test enters at the start with the start's height.
+                #[test]
+                fn ray_starting_inside() {
+                    let prism = unit_prism();
+                    let tri = [V3::new(0.0, 0.0, 0.8), V3::new(1.0, 0.0, 0.8), V3::new(0.0, 1.0, 0.8)];
+                    let ray = Ray::new(V3::new(0.2, 0.3, 0.3), V3::new(0.0, 0.0, 1.0)).unwrap();
+                    let nl = NonlinearRay::new(&prism, &ray);
+                    let hit = intersect_microtriangle(&prism, &nl, &tri, 0.0, 1.0, 0.0, T::INFINITY).expect("hit");
+                    let tol = 64.0 * T::UNIT_ROUNDOFF;
+                    assert!((hit.t - 0.5).abs() <= tol && (hit.h - 0.8).abs() <= tol, "{hit:?}");
+                    let span = intersect_prism(&prism, &ray, 0.0, T::INFINITY).unwrap();
+                    assert!(span.t_in == 0.0 && (span.h_in - 0.3).abs() <= tol && (span.t_out - 0.7).abs() <= tol, "{span:?}");
+                }
+
+                /// A ray through a vertex and one along an edge of the microtriangle: edges and
+                /// vertices count as inside (no ray slips between two microtriangles there).
+                #[test]
+                fn rays_through_a_vertex_and_an_edge() {
+                    let prism = unit_prism();
+                    let tri = [V3::new(0.25, 0.25, 0.5), V3::new(0.5, 0.25, 0.5), V3::new(0.25, 0.5, 0.6)];
+                    for (x, y) in [(0.25, 0.25), (0.375, 0.25), (0.5, 0.25)] {
+                        let ray = Ray::new(V3::new(x, y, 3.0), V3::new(0.0, 0.0, -1.0)).unwrap();
+                        let nl = NonlinearRay::new(&prism, &ray);
+                        let hit = intersect_microtriangle(&prism, &nl, &tri, 0.0, 1.0, 0.0, T::INFINITY);
+                        assert!(hit.is_some_and(|h| (h.h - 0.5).abs() <= 64.0 * T::UNIT_ROUNDOFF), "({x}, {y}): {hit:?}");
+                    }
+                }
+            }
+        )*};
+    }
+    hard_cases!(f32, f64);
+}
