@@ -331,6 +331,53 @@ mod hard_cases {
                     assert!(span.t_in == 0.0 && (span.h_in - 0.3).abs() <= tol && (span.t_out - 0.7).abs() <= tol, "{span:?}");
                 }
 
+                /// Degenerate prisms (Fig. 9): a base triangle collapsed to a line in world space
+                /// (but not in uv), normals that pinch the prism to a line at h = 0.5, and normals
+                /// that cross (a self-intersecting prism). No NaN, no panic, and every reported
+                /// hit lies on the ray and on the shell.
+                #[test]
+                fn degenerate_prisms_give_no_nan_and_no_off_ray_hits() {
+                    let w = |u: T, v: T| <<T as Real>::Vec2 as Vector2<T>>::new(u, v);
+                    let uv = [w(0.0, 0.0), w(1.0, 0.0), w(0.0, 1.0)];
+                    let z = V3::new(0.0, 0.0, 1.0);
+                    let prisms = [
+                        // Collinear base in world space.
+                        Prism::<T>::new([V3::new(0.0, 0.0, 0.0), V3::new(1.0, 0.0, 0.0), V3::new(0.5, 0.0, 0.0)], [z, z, z], uv),
+                        // Normals pinch the prism to a point-line at h = 0.5 (all S_i(0.5) meet).
+                        Prism::<T>::new(
+                            [V3::new(0.0, 0.0, 0.0), V3::new(1.0, 0.0, 0.0), V3::new(0.0, 1.0, 0.0)],
+                            [V3::new(0.2, 0.2, 1.0), V3::new(-1.8, 0.2, 1.0), V3::new(0.2, -1.8, 1.0)],
+                            uv,
+                        ),
+                        // Crossing normals: the prism folds through itself.
+                        Prism::<T>::new(
+                            [V3::new(0.0, 0.0, 0.0), V3::new(1.0, 0.0, 0.0), V3::new(0.0, 1.0, 0.0)],
+                            [V3::new(1.5, 0.0, 1.0), V3::new(-1.5, 0.0, 1.0), V3::new(0.0, -1.5, 1.0)],
+                            uv,
+                        ),
+                    ];
+                    let tri = [V3::new(0.0, 0.0, 0.3), V3::new(1.0, 0.0, 0.7), V3::new(0.0, 1.0, 0.5)];
+                    let tol = 1024.0 * T::UNIT_ROUNDOFF;
+                    let mut hits = 0;
+                    for prism in prisms {
+                        for (ox, oy, dx, dy) in [(0.3, 0.2, 0.0, 0.0), (-1.0, 0.1, 1.0, 0.1), (0.2, -1.0, 0.1, 1.0), (0.5, 0.0, 0.0, 0.0)] {
+                            let ray = Ray::new(V3::new(ox, oy, 2.0), V3::new(dx, dy, -1.0)).unwrap();
+                            let nl = NonlinearRay::new(&prism, &ray);
+                            if let Some(hit) = intersect_microtriangle(&prism, &nl, &tri, 0.0, 1.0, 0.0, T::INFINITY) {
+                                let all = [hit.t, hit.alpha, hit.beta, hit.h, hit.u, hit.v];
+                                assert!(all.iter().all(|v| v.is_finite()), "{hit:?}");
+                                let x = prism.shell_point(hit.alpha, hit.beta, hit.h);
+                                assert!((ray.at(hit.t) - x).length() <= tol * (1.0 + hit.t), "off the ray: {hit:?}");
+                                hits += 1;
+                            }
+                            let _ = intersect_prism(&prism, &ray, 0.0, T::INFINITY);
+                            let _ = intersect_box(&prism, &nl, [0.0, 0.0, 0.0], [0.5, 0.5, 1.0], 0.0, T::INFINITY);
+                        }
+                    }
+                    // The checks above must have seen hits (the pinched and folded prisms are hit).
+                    assert!(hits >= 1, "no hit: the checks above were vacuous");
+                }
+
                 /// A ray through a vertex and one along an edge of the microtriangle: edges and
                 /// vertices count as inside (no ray slips between two microtriangles there).
                 #[test]
