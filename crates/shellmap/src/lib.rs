@@ -18,8 +18,8 @@
 //! assert!((hit.t - 2.5).abs() < 1e-12 && (hit.h - 0.5).abs() < 1e-12);
 //! ```
 //!
-//! Work in progress: the flat-texel shortcut, the oracle-backed hard cases and the
-//! high-precision versions of these operations are still to come.
+//! Work in progress: more oracle-backed hard cases and high-precision versions of the mapping
+//! and of nonlinear-ray evaluation are still to come.
 #![no_std]
 #![warn(missing_docs)]
 // `!(a <= b)` is deliberate: it is true when either side is NaN.
@@ -37,7 +37,7 @@ mod ray;
 pub use aabb::{BoxSpan, intersect_box};
 pub use microtriangle::{
     Hit, TexturePlane, alpha_beta_eq11, inside_triangle, intersect_flat_microtriangle,
-    intersect_microtriangle, world_normal,
+    intersect_flat_texel, intersect_microtriangle, world_normal,
 };
 pub use prism::{Canonical, Prism};
 pub use prism_hit::{PrismSpan, intersect_prism};

@@ -169,6 +169,36 @@ pub fn intersect_flat_microtriangle<T: Real>(
     })
 }
 
+/// The hit of the world ray on a flat texel: the texture-space rectangle `[u0, u1] x [v0, v1]`
+/// at constant height `h` (sec. 5.4: a texel whose min and max heights agree is tested as one
+/// flat rectangle instead of two microtriangles). Same cross-section test as
+/// [`intersect_flat_microtriangle`], with a rectangle for the inside test (edges included).
+#[must_use]
+pub fn intersect_flat_texel<T: Real>(
+    prism: &Prism<T>,
+    ray: &NonlinearRay<T>,
+    lo: [T; 2],
+    hi: [T; 2],
+    h: T,
+    t_min: T,
+    t_max: T,
+) -> Option<Hit<T>> {
+    let (t, alpha, beta) = prism.cross_section_hit(&ray.ray, h)?;
+    if !(t >= t_min && t <= t_max) {
+        return None;
+    }
+    let uv = prism.texture_uv(alpha, beta);
+    let (u, v) = (nlrt_poly::Vector2::x(uv), nlrt_poly::Vector2::y(uv));
+    (u >= lo[0] && u <= hi[0] && v >= lo[1] && v <= hi[1]).then_some(Hit {
+        t,
+        alpha,
+        beta,
+        h,
+        u,
+        v,
+    })
+}
+
 /// The nearest hit with `t` in `[t_min, t_max]` of a nonlinear ray on a texture-space
 /// microtriangle `tri` (vertices `(u, v, h)`), with `h` restricted to `[h_lo, h_hi]` (the
 /// ray's height range in the prism). Every root of the plane cubic in the range is tried:
