@@ -6,29 +6,15 @@
 //! root's attainable error, 64 u sum|c_i||h|^i / |p'(h)| for the plane cubic `p` as the
 //! tracer computed it (its coefficients carry a few dozen roundings).
 
+mod common;
+
 use nlrt_oracle::shell::{ShellScene, true_microtriangle_hit};
 use nlrt_poly::{Real, Vector2, Vector3};
 use nlrt_shellmap::{NonlinearRay, Prism, Ray, TexturePlane, intersect_microtriangle};
 use proptest::prelude::*;
 
 fn config() -> ProptestConfig {
-    let cases = if std::env::var_os("NLRT_EXTENSIVE").is_some() {
-        2_000
-    } else {
-        64
-    };
-    // A fixed seed keeps CI reproducible; extensive runs explore new inputs each time.
-    let rng_seed = if std::env::var_os("NLRT_EXTENSIVE").is_some() {
-        proptest::test_runner::RngSeed::Random
-    } else {
-        proptest::test_runner::RngSeed::Fixed(0x6e6c_7274)
-    };
-    ProptestConfig {
-        cases,
-        failure_persistence: None,
-        rng_seed,
-        ..ProptestConfig::default()
-    }
+    common::proptest_config(64, 2000)
 }
 
 fn v3<T: Real>(v: T::Vec3) -> [f64; 3] {

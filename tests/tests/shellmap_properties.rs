@@ -3,6 +3,8 @@
 //! Tolerances are stated relative to the unit roundoff `u` of the type and to the size of the
 //! geometry (coordinates are O(1) here); each says why it has its value.
 
+mod common;
+
 use nlrt_poly::{Real, Vector2, Vector3};
 use nlrt_shellmap::{
     NonlinearRay, Prism, Ray, TexturePlane, intersect_box, intersect_microtriangle, intersect_prism,
@@ -10,23 +12,7 @@ use nlrt_shellmap::{
 use proptest::prelude::*;
 
 fn config() -> ProptestConfig {
-    let cases = if std::env::var_os("NLRT_EXTENSIVE").is_some() {
-        20_000
-    } else {
-        256
-    };
-    // A fixed seed keeps CI reproducible; extensive runs explore new inputs each time.
-    let rng_seed = if std::env::var_os("NLRT_EXTENSIVE").is_some() {
-        proptest::test_runner::RngSeed::Random
-    } else {
-        proptest::test_runner::RngSeed::Fixed(0x6e6c_7274)
-    };
-    ProptestConfig {
-        cases,
-        failure_persistence: None,
-        rng_seed,
-        ..ProptestConfig::default()
-    }
+    common::proptest_config(256, 20000)
 }
 
 /// A well-shaped prism: base triangle near the unit right triangle in the xy plane, normals

@@ -3,6 +3,8 @@
 //! Case counts: 256 per property by default; `NLRT_EXTENSIVE=1` runs 20,000 (or set
 //! `PROPTEST_CASES` directly).
 
+mod common;
+
 use nlrt_oracle::families::cubic_from_roots;
 use nlrt_oracle::{Tolerance, Truth};
 use nlrt_poly::{
@@ -11,26 +13,7 @@ use nlrt_poly::{
 use proptest::prelude::*;
 
 fn config() -> ProptestConfig {
-    let cases = if std::env::var_os("NLRT_EXTENSIVE").is_some() {
-        20_000
-    } else {
-        std::env::var("PROPTEST_CASES")
-            .ok()
-            .and_then(|v| v.parse().ok())
-            .unwrap_or(256)
-    };
-    // A fixed seed keeps CI reproducible; extensive runs explore new inputs each time.
-    let rng_seed = if std::env::var_os("NLRT_EXTENSIVE").is_some() {
-        proptest::test_runner::RngSeed::Random
-    } else {
-        proptest::test_runner::RngSeed::Fixed(0x6e6c_7274)
-    };
-    ProptestConfig {
-        cases,
-        failure_persistence: None,
-        rng_seed,
-        ..ProptestConfig::default()
-    }
+    common::proptest_config(256, 20000)
 }
 
 /// A root: a signed mantissa in [0.5, 1) times 2^e, with e over a wide but type-safe range.
