@@ -3,3 +3,4 @@
 //! properties), so a property is written once.
 
 pub mod fuzz_input;
+pub mod geometry;

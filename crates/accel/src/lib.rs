@@ -1,5 +1,49 @@
-//! nlrt-accel: not yet implemented; see the project's issues.
+//! # nlrt-accel
+//!
+//! The acceleration structures of nonlinear ray tracing (Ogaki 2023, sec. 4.4, 5.1, 5.2,
+//! 5.4), generic over `f32`/`f64`, `no_std` + `alloc`:
+//!
+//! - [`Bvh4`]: a 4-ary binned-SAH BVH with a conservative slab test, used as the TLAS over
+//!   prisms (built on the fly from the [`BaseMesh`], never stored).
+//! - [`HeightField`]: 16-bit heights with an implicit min-max pyramid (levels 0 and 1 read
+//!   from the samples, the rest stored), partial updates after edits.
+//! - [`DisplacedSurface`]: TLAS + the pyramid traversed by nonlinear rays (root selection,
+//!   texel discard, nearest-first order, range reduction, flat-texel shortcut).
+//!
+//! ```
+//! use nlrt_accel::{BaseMesh, DisplacedSurface, HeightField, TraversalStats, Wrap};
+//! use nlrt_poly::glam::{DVec2, DVec3};
+//! use nlrt_shellmap::Ray;
+//! // A unit square of two triangles, displaced along +z by up to 0.5 by a 4 x 4 map whose
+//! // heights are all 1 (a flat plane at z = 0.5).
+//! let p = vec![DVec3::ZERO, DVec3::X, DVec3::new(1.0, 1.0, 0.0), DVec3::Y];
+//! let uv = p.iter().map(|p| DVec2::new(p.x, p.y)).collect();
+//! let mesh = BaseMesh::new(p, vec![DVec3::Z; 4], uv, vec![[0, 1, 2], [0, 2, 3]]).unwrap();
+//! let field = HeightField::new(4, vec![u16::MAX; 16], Wrap::Repeat).unwrap();
+//! let surface = DisplacedSurface::new(mesh, field, 0.5, 1.0).unwrap();
+//! let ray = Ray::new(DVec3::new(0.3, 0.6, 2.0), -DVec3::Z).unwrap();
+//! let hit = surface.intersect(&ray, 0.0, f64::INFINITY, &mut TraversalStats::default()).unwrap();
+//! assert!((hit.hit.t - 1.5).abs() < 1e-12);
+//! ```
 #![no_std]
+#![warn(missing_docs)]
+// `!(a <= b)` is deliberate: it is true when either side is NaN.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 #[cfg(not(any(feature = "std", feature = "libm")))]
 compile_error!("nlrt-accel needs the `std` or the `libm` feature");
+
+extern crate alloc;
+
+mod bvh;
+mod displacement;
+mod heightfield;
+mod mesh;
+
+pub use bvh::{ARITY, Aabb, Bvh4, Node4, SlabRay};
+pub use displacement::{
+    DisplacedSurface, DisplacementError, MAX_TEXEL_COORDINATE, RootNodes, SurfaceHit, TexelPart,
+    TraversalStats,
+};
+pub use heightfield::{HEIGHT_ONE, HeightField, HeightMapError, Wrap};
+pub use mesh::{BaseMesh, MeshError, prism_bounds};

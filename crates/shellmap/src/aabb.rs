@@ -3,7 +3,7 @@
 
 use crate::prism::Prism;
 use crate::ray::NonlinearRay;
-use nlrt_poly::{Real, solve_quadratic_in};
+use nlrt_poly::{Real, Vector2, solve_quadratic_in};
 
 /// Where a nonlinear ray is inside a texture-space box: the range of heights and the range of
 /// distances along the world ray that the accelerators use for ordering and range reduction.
@@ -101,9 +101,41 @@ pub fn intersect_box<T: Real>(
         ray.alpha_beta(h)
             .map(|(alpha, beta)| ray.signed_distance(prism, alpha, beta, h))
     };
+    // Inside-ness is judged with the faces moved out by a bound on the rounding error of
+    // u(h) and v(h): the error of each coefficient of U, V and D (sums of three products of
+    // accurately computed terms) and of evaluating them, both below gamma(8) times the same
+    // polynomials with absolute-valued terms. Without it, a curve running along a face (a
+    // base triangle degenerate in uv onto a texel edge) is put on either side of the face by
+    // rounding, and a box whose microtriangles the curve hits is culled.
+    let [t0, t1, t2] = prism.uv;
+    let (du1, du2) = ((t1.x() - t0.x()).abs(), (t2.x() - t0.x()).abs());
+    let (dv1, dv2) = ((t1.y() - t0.y()).abs(), (t2.y() - t0.y()).abs());
+    let magnitude = |i: usize, base: T, e1: T, e2: T| {
+        ray.d[i].abs().mul_add(
+            base.abs(),
+            ray.alpha[i].abs().mul_add(e1, ray.beta[i].abs() * e2),
+        )
+    };
+    let mu: [T; 3] = core::array::from_fn(|i| magnitude(i, t0.x(), du1, du2));
+    let mv: [T; 3] = core::array::from_fn(|i| magnitude(i, t0.y(), dv1, dv2));
+    let md: [T; 3] = core::array::from_fn(|i| ray.d[i].abs());
+    let eight_u = T::from_i32(8) * T::UNIT_ROUNDOFF;
+    let gamma8 = eight_u / (T::ONE - eight_u);
+    let abs_at = |c: &[T; 3], h: T| c[2].mul_add(h, c[1]).mul_add(h, c[0]);
     let inside = |h: T| {
-        ray.uv(h)
-            .is_some_and(|(u, v)| u >= lo[0] && u <= hi[0] && v >= lo[1] && v <= hi[1])
+        let a = h.abs();
+        let d = d[2].mul_add(h, d[1]).mul_add(h, d[0]);
+        if d == T::ZERO {
+            return false;
+        }
+        let (u, v) = (
+            ray.u[2].mul_add(h, ray.u[1]).mul_add(h, ray.u[0]) / d,
+            ray.v[2].mul_add(h, ray.v[1]).mul_add(h, ray.v[0]) / d,
+        );
+        let (d_abs, inv) = (abs_at(&md, a), gamma8 / d.abs());
+        let eu = (abs_at(&mu, a) + u.abs() * d_abs) * inv;
+        let ev = (abs_at(&mv, a) + v.abs() * d_abs) * inv;
+        u >= lo[0] - eu && u <= hi[0] + eu && v >= lo[1] - ev && v <= hi[1] + ev
     };
     let in_range = |t: T| t >= t_min && t <= t_max;
     for i in 0..candidates.len() {

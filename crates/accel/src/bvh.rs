@@ -1,0 +1,568 @@
+//! A 4-ary bounding volume hierarchy: binned SAH build (no spatial splits), flat nodes, and a
+//! nearest-first traversal with a conservative slab test (Ize 2013). One builder serves the
+//! TLAS over prisms, an instanced object's texture-space BVH and the pre-tessellated
+//! reference.
+
+use alloc::vec::Vec;
+use nlrt_poly::{Real, Vector3};
+
+/// An axis-aligned box `[lo, hi]`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Aabb<T> {
+    /// Lower corner.
+    pub lo: [T; 3],
+    /// Upper corner.
+    pub hi: [T; 3],
+}
+
+impl<T: Real> Aabb<T> {
+    /// The empty box (union identity).
+    pub const EMPTY: Self = Self {
+        lo: [T::INFINITY; 3],
+        hi: [T::NEG_INFINITY; 3],
+    };
+
+    /// The smallest box holding `points`.
+    #[must_use]
+    pub fn of_points(points: impl IntoIterator<Item = T::Vec3>) -> Self {
+        let mut b = Self::EMPTY;
+        for p in points {
+            b.grow_point(p);
+        }
+        b
+    }
+
+    /// Grows to hold `p`.
+    pub fn grow_point(&mut self, p: T::Vec3) {
+        for i in 0..3 {
+            self.lo[i] = self.lo[i].min(p.get(i));
+            self.hi[i] = self.hi[i].max(p.get(i));
+        }
+    }
+
+    /// The union.
+    #[must_use]
+    pub fn union(&self, o: &Self) -> Self {
+        Self {
+            lo: core::array::from_fn(|i| self.lo[i].min(o.lo[i])),
+            hi: core::array::from_fn(|i| self.hi[i].max(o.hi[i])),
+        }
+    }
+
+    /// Half the surface area (the SAH cost weight); 0 when empty.
+    #[must_use]
+    pub fn half_area(&self) -> T {
+        let d: [T; 3] = core::array::from_fn(|i| (self.hi[i] - self.lo[i]).max(T::ZERO));
+        d[0] * d[1] + d[1] * d[2] + d[2] * d[0]
+    }
+
+    /// Centre along axis `i`.
+    #[must_use]
+    pub fn centre(&self, i: usize) -> T {
+        (self.lo[i] + self.hi[i]) * T::HALF
+    }
+
+    /// Whether every bound is finite (a box with a NaN or infinite corner is rejected).
+    #[must_use]
+    pub fn is_finite(&self) -> bool {
+        self.lo.iter().chain(self.hi.iter()).all(|v| v.is_finite())
+    }
+}
+
+/// A ray prepared for slab tests: origin and reciprocal direction.
+#[derive(Clone, Copy, Debug)]
+pub struct SlabRay<T> {
+    origin: [T; 3],
+    inv_dir: [T; 3],
+}
+
+impl<T: Real> SlabRay<T> {
+    /// From origin and direction (direction components may be zero: their reciprocals are
+    /// infinite and the slab test handles them).
+    #[must_use]
+    pub fn new(origin: T::Vec3, dir: T::Vec3) -> Self {
+        Self {
+            origin: core::array::from_fn(|i| origin.get(i)),
+            inv_dir: core::array::from_fn(|i| T::ONE / dir.get(i)),
+        }
+    }
+
+    /// Entry distance into `b` within `[t_min, t_max]`, or `None`. Conservative: the exit
+    /// distance is enlarged by `1 + 2 gamma(3)` (Ize 2013, "Robust BVH Ray Traversal"), so
+    /// rounding in the slab distances never culls a box the exact ray meets. A `0 * inf` NaN
+    /// (origin on a slab plane, direction parallel to it) is ignored by `min`/`max`, which
+    /// keeps that axis unconstrained: conservative too.
+    #[must_use]
+    #[inline]
+    pub fn entry(&self, lo: [T; 3], hi: [T; 3], t_min: T, t_max: T) -> Option<T> {
+        let three_u = T::THREE * T::UNIT_ROUNDOFF;
+        let widen = T::ONE + T::TWO * (three_u / (T::ONE - three_u));
+        let mut t0 = t_min;
+        let mut t1 = t_max;
+        for i in 0..3 {
+            let a = (lo[i] - self.origin[i]) * self.inv_dir[i];
+            let b = (hi[i] - self.origin[i]) * self.inv_dir[i];
+            let (near, far) = if a <= b { (a, b) } else { (b, a) };
+            t0 = t0.max(near);
+            t1 = t1.min(far * widen);
+        }
+        (t0 <= t1).then_some(t0)
+    }
+}
+
+/// Children per node.
+pub const ARITY: usize = 4;
+/// Marks an unused child slot.
+const EMPTY_CHILD: u32 = u32::MAX;
+
+/// A node: up to four children, each an inner node (`count == 0`, `index` = node) or a leaf
+/// (`count > 0` primitives at `index` in the primitive order).
+#[derive(Clone, Copy, Debug)]
+pub struct Node4<T> {
+    /// Child boxes.
+    pub bounds: [Aabb<T>; ARITY],
+    /// Node index or first primitive.
+    pub index: [u32; ARITY],
+    /// 0 for an inner node, else the primitive count.
+    pub count: [u32; ARITY],
+}
+
+/// A 4-ary BVH over primitives given by their boxes.
+#[derive(Clone, Debug)]
+pub struct Bvh4<T> {
+    nodes: Vec<Node4<T>>,
+    order: Vec<u32>,
+    root_bounds: Aabb<T>,
+}
+
+/// Binary depth after which the builder switches from SAH to median splits, so that any
+/// input (e.g. exponentially spaced boxes, where SAH peels one box per level) gives a tree of
+/// depth at most `MEDIAN_AFTER_DEPTH + log2(n)`.
+const MEDIAN_AFTER_DEPTH: usize = 40;
+/// Traversal stack: a 4-ary node pushes at most 3 entries more than it pops, and the 4-ary
+/// depth is at most the binary depth (< 40 + 32).
+const STACK: usize = 3 * (MEDIAN_AFTER_DEPTH + 32) + 1;
+
+/// Bins of the SAH sweep.
+const BINS: usize = 16;
+
+struct Build<'a, T> {
+    boxes: &'a [Aabb<T>],
+    centres: Vec<[T; 3]>,
+    max_leaf: usize,
+}
+
+/// A binary node before collapsing to 4-ary.
+enum Binary<T> {
+    Leaf {
+        bounds: Aabb<T>,
+        first: u32,
+        count: u32,
+    },
+    Inner {
+        bounds: Aabb<T>,
+        children: [usize; 2],
+    },
+}
+
+impl<T: Real> Build<'_, T> {
+    /// Splits at the median centre along the widest centre axis; `None` for a leaf.
+    fn median_split(&self, order: &mut [u32]) -> Option<usize> {
+        let n = order.len();
+        if n <= self.max_leaf {
+            return None;
+        }
+        let mut cb = Aabb::<T>::EMPTY;
+        for &p in order.iter() {
+            let c = self.centres[p as usize];
+            cb.grow_point(T::Vec3::new(c[0], c[1], c[2]));
+        }
+        let axis = (0..3)
+            .max_by(|&a, &b| {
+                (cb.hi[a] - cb.lo[a])
+                    .partial_cmp(&(cb.hi[b] - cb.lo[b]))
+                    .unwrap_or(core::cmp::Ordering::Equal)
+            })
+            .unwrap_or(0);
+        order.select_nth_unstable_by(n / 2, |&a, &b| {
+            self.centres[a as usize][axis]
+                .partial_cmp(&self.centres[b as usize][axis])
+                .unwrap_or(core::cmp::Ordering::Equal)
+        });
+        Some(n / 2)
+    }
+
+    /// Splits `order[range]` by the binned SAH; `None` to make a leaf.
+    fn split(&self, order: &mut [u32]) -> Option<usize> {
+        let n = order.len();
+        if n <= 1 {
+            return None;
+        }
+        let mut cb = Aabb::<T>::EMPTY;
+        for &p in order.iter() {
+            let c = self.centres[p as usize];
+            cb.grow_point(T::Vec3::new(c[0], c[1], c[2]));
+        }
+        let mut best: Option<(T, usize, usize)> = None; // cost, axis, bin
+        for axis in 0..3 {
+            let extent = cb.hi[axis] - cb.lo[axis];
+            if !(extent > T::ZERO) {
+                continue;
+            }
+            let scale = T::from_i32(BINS as i32) / extent;
+            let bin_of = |p: u32| -> usize {
+                let b = ((self.centres[p as usize][axis] - cb.lo[axis]) * scale).to_f64();
+                (b as usize).min(BINS - 1)
+            };
+            let mut bins = [(Aabb::<T>::EMPTY, 0usize); BINS];
+            for &p in order.iter() {
+                let b = &mut bins[bin_of(p)];
+                b.0 = b.0.union(&self.boxes[p as usize]);
+                b.1 += 1;
+            }
+            let mut right = [T::ZERO; BINS];
+            let (mut acc, mut cnt) = (Aabb::<T>::EMPTY, 0);
+            for i in (1..BINS).rev() {
+                acc = acc.union(&bins[i].0);
+                cnt += bins[i].1;
+                right[i] = acc.half_area() * T::from_i32(cnt as i32);
+            }
+            let (mut acc, mut cnt) = (Aabb::<T>::EMPTY, 0);
+            for i in 0..BINS - 1 {
+                acc = acc.union(&bins[i].0);
+                cnt += bins[i].1;
+                let cost = acc.half_area() * T::from_i32(cnt as i32) + right[i + 1];
+                if cnt > 0 && cnt < n && best.is_none_or(|(c, _, _)| cost < c) {
+                    best = Some((cost, axis, i));
+                }
+            }
+        }
+        let Some((_, axis, bin)) = best else {
+            // All centres coincide: split in the middle of the list (or make a leaf).
+            return (n > self.max_leaf).then_some(n / 2);
+        };
+        if n <= self.max_leaf {
+            let mut parent = Aabb::<T>::EMPTY;
+            for &p in order.iter() {
+                parent = parent.union(&self.boxes[p as usize]);
+            }
+            // Leaf when splitting does not pay (SAH with traversal cost ~ 1 intersection).
+            let leaf_cost = parent.half_area() * T::from_i32(n as i32);
+            let (cost, _, _) = best?;
+            if !(cost + parent.half_area() < leaf_cost) {
+                return None;
+            }
+        }
+        let extent = cb.hi[axis] - cb.lo[axis];
+        let scale = T::from_i32(BINS as i32) / extent;
+        let lo = cb.lo[axis];
+        let mut left = 0;
+        for i in 0..n {
+            let b = ((self.centres[order[i] as usize][axis] - lo) * scale).to_f64();
+            if (b as usize).min(BINS - 1) <= bin {
+                order.swap(i, left);
+                left += 1;
+            }
+        }
+        (left > 0 && left < n).then_some(left)
+    }
+}
+
+impl<T: Real> Bvh4<T> {
+    /// Builds over `boxes` with at most `max_leaf` primitives per leaf (1 for the TLAS: one
+    /// prism per leaf). Boxes that are not finite are left out of the tree (they can hold no
+    /// finite hit); [`Bvh4::primitive_count`] tells how many went in.
+    #[must_use]
+    pub fn build(boxes: &[Aabb<T>], max_leaf: usize) -> Self {
+        let max_leaf = max_leaf.max(1);
+        let mut order: Vec<u32> = (0..boxes.len() as u32)
+            .filter(|&i| boxes[i as usize].is_finite())
+            .collect();
+        let centres = boxes
+            .iter()
+            .map(|b| core::array::from_fn(|i| b.centre(i)))
+            .collect();
+        let build = Build {
+            boxes,
+            centres,
+            max_leaf,
+        };
+        // Binary tree first (explicit stack), then collapse.
+        let mut binary: Vec<Binary<T>> = Vec::new();
+        let bounds_of = |order: &[u32]| {
+            order
+                .iter()
+                .fold(Aabb::<T>::EMPTY, |a, &p| a.union(&boxes[p as usize]))
+        };
+        if order.is_empty() {
+            return Self {
+                nodes: Vec::new(),
+                order,
+                root_bounds: Aabb::EMPTY,
+            };
+        }
+        // (start, end, slot in `binary` to fill)
+        binary.push(Binary::Leaf {
+            bounds: Aabb::EMPTY,
+            first: 0,
+            count: 0,
+        });
+        let mut stack = alloc::vec![(0usize, order.len(), 0usize, 0usize)];
+        while let Some((start, end, slot, depth)) = stack.pop() {
+            let bounds = bounds_of(&order[start..end]);
+            let split = if depth < MEDIAN_AFTER_DEPTH {
+                build.split(&mut order[start..end])
+            } else {
+                build.median_split(&mut order[start..end])
+            };
+            match split {
+                None => {
+                    binary[slot] = Binary::Leaf {
+                        bounds,
+                        first: start as u32,
+                        count: (end - start) as u32,
+                    };
+                }
+                Some(mid) => {
+                    let (l, r) = (binary.len(), binary.len() + 1);
+                    for _ in 0..2 {
+                        binary.push(Binary::Leaf {
+                            bounds: Aabb::EMPTY,
+                            first: 0,
+                            count: 0,
+                        });
+                    }
+                    binary[slot] = Binary::Inner {
+                        bounds,
+                        children: [l, r],
+                    };
+                    stack.push((start, start + mid, l, depth + 1));
+                    stack.push((start + mid, end, r, depth + 1));
+                }
+            }
+        }
+        let root_bounds = match &binary[0] {
+            Binary::Leaf { bounds, .. } | Binary::Inner { bounds, .. } => *bounds,
+        };
+        let mut nodes = Vec::new();
+        collapse(&binary, 0, &mut nodes);
+        Self {
+            nodes,
+            order,
+            root_bounds,
+        }
+    }
+
+    /// Primitives in the tree.
+    #[must_use]
+    pub fn primitive_count(&self) -> usize {
+        self.order.len()
+    }
+
+    /// Inner nodes.
+    #[must_use]
+    pub fn node_count(&self) -> usize {
+        self.nodes.len()
+    }
+
+    /// Bytes of nodes and primitive order.
+    #[must_use]
+    pub fn memory_bytes(&self) -> usize {
+        self.nodes.len() * core::mem::size_of::<Node4<T>>() + self.order.len() * 4
+    }
+
+    /// Bounds of everything.
+    #[must_use]
+    pub fn bounds(&self) -> Aabb<T> {
+        self.root_bounds
+    }
+
+    /// Nearest-first traversal: calls `hit(primitive, t_max)` for every primitive whose leaf
+    /// box the ray enters before the current `t_max`; `hit` returns the distance of a hit
+    /// nearer than `t_max`, which then shrinks it. Returns the final `t_max` (the input when
+    /// nothing was hit).
+    pub fn traverse(
+        &self,
+        ray: &SlabRay<T>,
+        t_min: T,
+        mut t_max: T,
+        mut hit: impl FnMut(u32, T) -> Option<T>,
+    ) -> T {
+        if self.nodes.is_empty() {
+            return t_max;
+        }
+        let mut stack: [(u32, T); STACK] = [(0, T::ZERO); STACK];
+        let mut depth = 1;
+        stack[0] = (0, t_min);
+        while depth > 0 {
+            depth -= 1;
+            let (node, entry) = stack[depth];
+            if entry > t_max {
+                continue;
+            }
+            let node = &self.nodes[node as usize];
+            let mut order: [(T, usize); ARITY] = [(T::ZERO, 0); ARITY];
+            let mut n = 0;
+            for c in 0..ARITY {
+                if node.index[c] == EMPTY_CHILD {
+                    continue;
+                }
+                let b = &node.bounds[c];
+                if let Some(t) = ray.entry(b.lo, b.hi, t_min, t_max) {
+                    // Insertion sort, nearest first.
+                    let mut k = n;
+                    while k > 0 && order[k - 1].0 > t {
+                        order[k] = order[k - 1];
+                        k -= 1;
+                    }
+                    order[k] = (t, c);
+                    n += 1;
+                }
+            }
+            // Leaves now, nearest first; inner nodes pushed farthest first.
+            for &(t, c) in order[..n].iter() {
+                if node.count[c] > 0 && t <= t_max {
+                    let first = node.index[c] as usize;
+                    for &p in &self.order[first..first + node.count[c] as usize] {
+                        if let Some(th) = hit(p, t_max)
+                            && th < t_max
+                        {
+                            t_max = th;
+                        }
+                    }
+                }
+            }
+            for &(t, c) in order[..n].iter().rev() {
+                if node.count[c] == 0 {
+                    debug_assert!(depth < stack.len());
+                    stack[depth] = (node.index[c], t);
+                    depth += 1;
+                }
+            }
+        }
+        t_max
+    }
+}
+
+/// Collapses the binary subtree at `b` into 4-ary nodes appended to `nodes`; returns the
+/// node's index.
+fn collapse<T: Real>(binary: &[Binary<T>], b: usize, nodes: &mut Vec<Node4<T>>) -> u32 {
+    let me = nodes.len();
+    nodes.push(Node4 {
+        bounds: [Aabb::EMPTY; ARITY],
+        index: [EMPTY_CHILD; ARITY],
+        count: [0; ARITY],
+    });
+    // Children: open the binary children, then open inner grandchildren while room remains.
+    let mut kids: Vec<usize> = match &binary[b] {
+        Binary::Inner { children, .. } => children.to_vec(),
+        Binary::Leaf { .. } => alloc::vec![b],
+    };
+    loop {
+        if kids.len() >= ARITY {
+            break;
+        }
+        // Open the largest inner child.
+        let pick = kids
+            .iter()
+            .enumerate()
+            .filter_map(|(i, &k)| match &binary[k] {
+                Binary::Inner { bounds, .. } => Some((i, bounds.half_area())),
+                Binary::Leaf { .. } => None,
+            })
+            .fold(None::<(usize, T)>, |best, (i, a)| match best {
+                Some((_, ba)) if !(a > ba) => best,
+                _ => Some((i, a)),
+            });
+        let Some((i, _)) = pick else { break };
+        let Binary::Inner { children, .. } = &binary[kids[i]] else {
+            unreachable!()
+        };
+        let children = *children;
+        kids[i] = children[0];
+        kids.push(children[1]);
+    }
+    for (slot, &k) in kids.iter().enumerate() {
+        match &binary[k] {
+            Binary::Leaf {
+                bounds,
+                first,
+                count,
+            } => {
+                nodes[me].bounds[slot] = *bounds;
+                nodes[me].index[slot] = *first;
+                nodes[me].count[slot] = *count;
+            }
+            Binary::Inner { bounds, .. } => {
+                let child = collapse(binary, k, nodes);
+                nodes[me].bounds[slot] = *bounds;
+                nodes[me].index[slot] = child;
+                nodes[me].count[slot] = 0;
+            }
+        }
+    }
+    me as u32
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nlrt_poly::glam::DVec3;
+
+    fn boxes(n: usize) -> Vec<Aabb<f64>> {
+        let mut s = 12345u64;
+        let mut r = move || {
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (s >> 11) as f64 / (1u64 << 53) as f64
+        };
+        (0..n)
+            .map(|_| {
+                let c = DVec3::new(r(), r(), r()) * 10.0;
+                let e = DVec3::new(r(), r(), r()) * 0.3;
+                Aabb::of_points([c - e, c + e])
+            })
+            .collect()
+    }
+
+    #[test]
+    fn traversal_finds_the_nearest_box_like_a_linear_scan() {
+        let bs = boxes(2000);
+        for max_leaf in [1, 4] {
+            let bvh = Bvh4::build(&bs, max_leaf);
+            assert_eq!(bvh.primitive_count(), bs.len());
+            let mut s = 99u64;
+            let mut r = move || {
+                s = s.wrapping_mul(6364136223846793005).wrapping_add(1);
+                (s >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+            };
+            for _ in 0..500 {
+                let o = DVec3::new(r(), r(), r()) * 30.0 + DVec3::splat(5.0);
+                let d = DVec3::new(r(), r(), r()).normalize();
+                let ray = SlabRay::new(o, d);
+                let linear = bs
+                    .iter()
+                    .filter_map(|b| ray.entry(b.lo, b.hi, 0.0, f64::INFINITY))
+                    .fold(f64::INFINITY, f64::min);
+                let mut visited = 0;
+                let t = bvh.traverse(&ray, 0.0, f64::INFINITY, |p, t_max| {
+                    visited += 1;
+                    let b = &bs[p as usize];
+                    ray.entry(b.lo, b.hi, 0.0, t_max)
+                });
+                assert_eq!(t, linear);
+                assert!(visited <= bs.len());
+            }
+        }
+    }
+
+    #[test]
+    fn non_finite_boxes_are_left_out() {
+        let mut bs = boxes(10);
+        bs[3].lo[0] = f64::NAN;
+        let bvh = Bvh4::build(&bs, 1);
+        assert_eq!(bvh.primitive_count(), 9);
+        assert_eq!(Bvh4::<f64>::build(&[], 1).primitive_count(), 0);
+    }
+}

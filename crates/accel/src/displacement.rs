@@ -1,0 +1,591 @@
+//! Displacement-mapped surfaces: the TLAS over prisms and the implicit min-max mipmap BLAS
+//! traversed by nonlinear rays (Ogaki 2023, sec. 4.4, 5.1, 5.4).
+
+use alloc::vec::Vec;
+use core::fmt;
+use nlrt_poly::{Real, Vector2, Vector3};
+use nlrt_shellmap::{
+    Hit, NonlinearRay, Prism, Ray, TexturePlane, intersect_box, intersect_flat_texel,
+    intersect_microtriangle, intersect_prism, world_normal,
+};
+
+use crate::bvh::{Aabb, Bvh4, SlabRay};
+use crate::heightfield::{HEIGHT_ONE, HeightField};
+use crate::mesh::{BaseMesh, prism_bounds};
+
+/// Texel coordinates beyond this (in one axis, after tiling) are rejected: they keep every
+/// texel corner exactly representable in `f32` (24-bit significand) with room to spare.
+pub const MAX_TEXEL_COORDINATE: f64 = (1u64 << 22) as f64;
+
+/// Why a displaced surface could not be built.
+#[derive(Clone, Debug, PartialEq)]
+pub enum DisplacementError {
+    /// The height scale is NaN or infinite.
+    BadHeightScale(f64),
+    /// The tiling is not a finite number > 0.
+    BadTiling(f64),
+    /// A triangle's texture coordinates, after tiling, reach beyond
+    /// [`MAX_TEXEL_COORDINATE`] texels.
+    UvOutOfRange {
+        /// The triangle.
+        triangle: usize,
+    },
+}
+
+impl fmt::Display for DisplacementError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::BadHeightScale(s) => write!(f, "height scale {s} is not a finite number"),
+            Self::BadTiling(k) => write!(f, "tiling {k} is not a finite number > 0"),
+            Self::UvOutOfRange { triangle } => write!(
+                f,
+                "triangle {triangle}: texture coordinates times tiling reach beyond {MAX_TEXEL_COORDINATE} texels"
+            ),
+        }
+    }
+}
+
+/// Where a base triangle's traversal starts: the smallest pyramid level at which the
+/// triangle's uv box spans at most 2 x 2 nodes, and those nodes (sec. 5.4, root selection).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct RootNodes {
+    /// Level (0 = texels).
+    pub level: u32,
+    /// First node.
+    pub x: i32,
+    /// First node.
+    pub y: i32,
+    /// Nodes along u (1 or 2).
+    pub nx: u8,
+    /// Nodes along v (1 or 2).
+    pub ny: u8,
+    /// Texel range of the uv box, inclusive: `[x0, y0, x1, y1]`.
+    pub texels: [i32; 4],
+}
+
+/// Which part of a texel was hit.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TexelPart {
+    /// The microtriangle `(x, y), (x + 1, y), (x + 1, y + 1)`.
+    Lower,
+    /// The microtriangle `(x, y), (x + 1, y + 1), (x, y + 1)`.
+    Upper,
+    /// The whole texel, flat (all four corners at one height; sec. 5.4).
+    Flat,
+}
+
+/// A hit on a displaced surface.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SurfaceHit<T: Real> {
+    /// The hit in the prism's coordinates.
+    pub hit: Hit<T>,
+    /// Base triangle.
+    pub triangle: u32,
+    /// Texel (in the infinite, tiled grid).
+    pub texel: [i32; 2],
+    /// Part of the texel.
+    pub part: TexelPart,
+}
+
+/// Counters of one traversal (for reports; cheap enough to keep on).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct TraversalStats {
+    /// Prisms whose exact test ran.
+    pub prism_tests: u32,
+    /// Texture-space box tests.
+    pub box_tests: u32,
+    /// Texels tested (each one or two microtriangles, or one flat rectangle).
+    pub texel_tests: u32,
+}
+
+/// A displacement-mapped mesh: base mesh, height field, height scale and tiling, with the
+/// TLAS over its prisms and the per-triangle roots into the height field's pyramid.
+#[derive(Clone, Debug)]
+pub struct DisplacedSurface<T: Real> {
+    mesh: BaseMesh<T>,
+    field: HeightField,
+    height_scale: T,
+    uv_scale: T,
+    texel_size: T,
+    roots: Vec<RootNodes>,
+    tlas: Bvh4<T>,
+}
+
+/// Entries of the BLAS stack: a node pushes at most 4 children after popping itself, and
+/// levels are below 64, so `3 * 64 + 4` suffices.
+const BLAS_STACK: usize = 196;
+
+#[derive(Clone, Copy)]
+struct Pending<T> {
+    level: u32,
+    x: i32,
+    y: i32,
+    t_in: T,
+}
+
+impl<T: Real> DisplacedSurface<T> {
+    /// Builds the surface: validates parameters, finds each triangle's root nodes and builds
+    /// the TLAS over the prisms (one prism per leaf). `tiling` is the number of repeats of the
+    /// height map per unit of uv (the fur torus uses 8).
+    ///
+    /// # Errors
+    /// A non-finite height scale, a tiling that is not finite and positive, or texture
+    /// coordinates too large for the texel grid.
+    pub fn new(
+        mesh: BaseMesh<T>,
+        field: HeightField,
+        height_scale: T,
+        tiling: T,
+    ) -> Result<Self, DisplacementError> {
+        if !height_scale.is_finite() {
+            return Err(DisplacementError::BadHeightScale(height_scale.to_f64()));
+        }
+        if !(tiling > T::ZERO && tiling.is_finite()) {
+            return Err(DisplacementError::BadTiling(tiling.to_f64()));
+        }
+        let side = field.side() as f64;
+        let texel_size = T::ONE / T::from_f64(side);
+        let mut roots = Vec::with_capacity(mesh.triangle_count());
+        let mut boxes = Vec::with_capacity(mesh.triangle_count());
+        for i in 0..mesh.triangle_count() {
+            let prism = mesh.prism(i, height_scale, tiling);
+            boxes.push(prism_bounds(&prism));
+            let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+            for uv in prism.uv {
+                for (a, c) in [uv.x(), uv.y()].into_iter().enumerate() {
+                    let texels = c.to_f64() * side;
+                    lo[a] = lo[a].min(texels);
+                    hi[a] = hi[a].max(texels);
+                }
+            }
+            if !(lo[0]
+                .abs()
+                .max(lo[1].abs())
+                .max(hi[0].abs())
+                .max(hi[1].abs())
+                < MAX_TEXEL_COORDINATE)
+            {
+                return Err(DisplacementError::UvOutOfRange { triangle: i });
+            }
+            roots.push(root_nodes(lo, hi));
+        }
+        let tlas = Bvh4::build(&boxes, 1);
+        Ok(Self {
+            mesh,
+            field,
+            height_scale,
+            uv_scale: tiling,
+            texel_size,
+            roots,
+            tlas,
+        })
+    }
+
+    /// The base mesh.
+    #[must_use]
+    pub fn mesh(&self) -> &BaseMesh<T> {
+        &self.mesh
+    }
+
+    /// The height field.
+    #[must_use]
+    pub fn field(&self) -> &HeightField {
+        &self.field
+    }
+
+    /// The height field, for editing; call [`HeightField::update_region`] after changing
+    /// samples. The TLAS stays valid (prism boxes do not depend on the heights).
+    pub fn field_mut(&mut self) -> &mut HeightField {
+        &mut self.field
+    }
+
+    /// The TLAS.
+    #[must_use]
+    pub fn tlas(&self) -> &Bvh4<T> {
+        &self.tlas
+    }
+
+    /// Root nodes of triangle `i`.
+    #[must_use]
+    pub fn roots(&self, i: usize) -> RootNodes {
+        self.roots[i]
+    }
+
+    /// The prism of triangle `i` (built on the fly).
+    #[must_use]
+    #[inline]
+    pub fn prism(&self, i: usize) -> Prism<T> {
+        self.mesh.prism(i, self.height_scale, self.uv_scale)
+    }
+
+    /// Bytes of the acceleration data: height samples and pyramid, TLAS, roots (the mesh is
+    /// counted separately by [`BaseMesh::memory_bytes`]).
+    #[must_use]
+    pub fn memory_bytes(&self) -> usize {
+        self.field.memory_bytes()
+            + self.tlas.memory_bytes()
+            + self.roots.len() * core::mem::size_of::<RootNodes>()
+    }
+
+    #[inline]
+    fn height(s: u16) -> T {
+        // Same division for samples and pyramid bounds: rounding is monotonic, so a bound
+        // stays a bound after conversion.
+        T::from_i32(i32::from(s)) / T::from_i32(i32::from(HEIGHT_ONE))
+    }
+
+    #[inline]
+    fn coord(&self, i: i32) -> T {
+        T::from_i32(i) * self.texel_size
+    }
+
+    /// The texture-space microtriangles (or flat texel) of texel `(x, y)`.
+    fn texel_geometry(&self, x: i32, y: i32) -> ([T; 4], [T; 4]) {
+        let c = self.field.texel_corners(i64::from(x), i64::from(y));
+        let h = c.map(Self::height);
+        let uv = [
+            self.coord(x),
+            self.coord(y),
+            self.coord(x + 1),
+            self.coord(y + 1),
+        ];
+        (uv, h)
+    }
+
+    /// The nearest hit on texel `(x, y)` with `t` in `[t_min, t_max]`.
+    #[inline]
+    pub fn intersect_texel(
+        &self,
+        prism: &Prism<T>,
+        ray: &NonlinearRay<T>,
+        x: i32,
+        y: i32,
+        t_min: T,
+        t_max: T,
+    ) -> Option<(Hit<T>, TexelPart)> {
+        let ([u0, v0, u1, v1], [h00, h10, h01, h11]) = self.texel_geometry(x, y);
+        if h00 == h10 && h00 == h01 && h00 == h11 {
+            return intersect_flat_texel(prism, ray, [u0, v0], [u1, v1], h00, t_min, t_max)
+                .map(|hit| (hit, TexelPart::Flat));
+        }
+        let p = |u: T, v: T, h: T| T::Vec3::new(u, v, h);
+        let lower = [p(u0, v0, h00), p(u1, v0, h10), p(u1, v1, h11)];
+        let upper = [p(u0, v0, h00), p(u1, v1, h11), p(u0, v1, h01)];
+        let range = |t: &[T::Vec3; 3]| {
+            (
+                t[0].z().min(t[1].z()).min(t[2].z()),
+                t[0].z().max(t[1].z()).max(t[2].z()),
+            )
+        };
+        let mut best = None;
+        let mut t_max = t_max;
+        for (tri, part) in [(lower, TexelPart::Lower), (upper, TexelPart::Upper)] {
+            let (lo, hi) = range(&tri);
+            if let Some(hit) = intersect_microtriangle(prism, ray, &tri, lo, hi, t_min, t_max) {
+                t_max = hit.t;
+                best = Some((hit, part));
+            }
+        }
+        best
+    }
+
+    /// The nearest hit of `ray` on the displaced surface of triangle `tri` through the
+    /// min-max pyramid (the BLAS): texture-space box test per node, children in order of
+    /// entry distance, nodes entered beyond the current nearest hit skipped, texels whose uv
+    /// square misses the base triangle's uv triangle skipped (texel discard), and per
+    /// microtriangle the cubic solved only between its lowest and highest vertex.
+    pub fn intersect_blas(
+        &self,
+        tri: usize,
+        prism: &Prism<T>,
+        ray: &NonlinearRay<T>,
+        t_min: T,
+        t_max: T,
+        stats: &mut TraversalStats,
+    ) -> Option<SurfaceHit<T>> {
+        let root = self.roots[tri];
+        let uv_tri = prism.uv.map(|t| {
+            [
+                t.x() * T::from_f64(self.field.side() as f64),
+                t.y() * T::from_f64(self.field.side() as f64),
+            ]
+        });
+        let mut stack = [Pending {
+            level: 0,
+            x: 0,
+            y: 0,
+            t_in: T::ZERO,
+        }; BLAS_STACK];
+        let mut depth = 0;
+        let mut best: Option<SurfaceHit<T>> = None;
+        let mut t_max = t_max;
+        // Visit candidates (children of a node, or the roots): box-test, sort, push.
+        let push_nodes = |level: u32,
+                          nodes: &mut dyn Iterator<Item = (i32, i32)>,
+                          t_max: T,
+                          stack: &mut [Pending<T>; BLAS_STACK],
+                          depth: &mut usize,
+                          stats: &mut TraversalStats| {
+            let mut found: [Pending<T>; 4] = [Pending {
+                level,
+                x: 0,
+                y: 0,
+                t_in: T::ZERO,
+            }; 4];
+            let mut n = 0;
+            for (x, y) in nodes {
+                // Texel discard: the node's texel square against the base triangle in uv.
+                let k = 1i64 << level;
+                let (tx0, ty0) = (i64::from(x) * k, i64::from(y) * k);
+                let [r0, r1, r2, r3] = root.texels;
+                if tx0 > i64::from(r2)
+                    || ty0 > i64::from(r3)
+                    || tx0 + k <= i64::from(r0)
+                    || ty0 + k <= i64::from(r1)
+                {
+                    continue;
+                }
+                let lo_t = [T::from_f64(tx0 as f64), T::from_f64(ty0 as f64)];
+                let hi_t = [T::from_f64((tx0 + k) as f64), T::from_f64((ty0 + k) as f64)];
+                if !square_meets_triangle(lo_t, hi_t, &uv_tri) {
+                    continue;
+                }
+                let [hmin, hmax] = self.field.texel_bounds(level, i64::from(x), i64::from(y));
+                let lo = [
+                    lo_t[0] * self.texel_size,
+                    lo_t[1] * self.texel_size,
+                    Self::height(hmin),
+                ];
+                let hi = [
+                    hi_t[0] * self.texel_size,
+                    hi_t[1] * self.texel_size,
+                    Self::height(hmax),
+                ];
+                stats.box_tests += 1;
+                if let Some(span) = intersect_box(prism, ray, lo, hi, t_min, t_max) {
+                    // Insertion sort, nearest first.
+                    let mut i = n;
+                    while i > 0 && found[i - 1].t_in > span.t_in {
+                        found[i] = found[i - 1];
+                        i -= 1;
+                    }
+                    found[i] = Pending {
+                        level,
+                        x,
+                        y,
+                        t_in: span.t_in,
+                    };
+                    n += 1;
+                }
+            }
+            for p in found[..n].iter().rev() {
+                stack[*depth] = *p;
+                *depth += 1;
+            }
+        };
+        let mut roots = (0..i32::from(root.ny))
+            .flat_map(|j| (0..i32::from(root.nx)).map(move |i| (root.x + i, root.y + j)));
+        push_nodes(root.level, &mut roots, t_max, &mut stack, &mut depth, stats);
+        while depth > 0 {
+            depth -= 1;
+            let node = stack[depth];
+            if node.t_in > t_max {
+                continue;
+            }
+            if node.level == 0 {
+                stats.texel_tests += 1;
+                if let Some((hit, part)) =
+                    self.intersect_texel(prism, ray, node.x, node.y, t_min, t_max)
+                {
+                    t_max = hit.t;
+                    best = Some(SurfaceHit {
+                        hit,
+                        triangle: tri as u32,
+                        texel: [node.x, node.y],
+                        part,
+                    });
+                }
+                continue;
+            }
+            let (x, y) = (node.x * 2, node.y * 2);
+            let mut children = [(x, y), (x + 1, y), (x, y + 1), (x + 1, y + 1)].into_iter();
+            push_nodes(
+                node.level - 1,
+                &mut children,
+                t_max,
+                &mut stack,
+                &mut depth,
+                stats,
+            );
+        }
+        best
+    }
+
+    /// The same answer as [`DisplacedSurface::intersect_blas`] without the pyramid: every
+    /// texel of the triangle's uv box is tested (the reference for tests).
+    pub fn intersect_blas_brute_force(
+        &self,
+        tri: usize,
+        prism: &Prism<T>,
+        ray: &NonlinearRay<T>,
+        t_min: T,
+        t_max: T,
+    ) -> Option<SurfaceHit<T>> {
+        let [x0, y0, x1, y1] = self.roots[tri].texels;
+        let mut best: Option<SurfaceHit<T>> = None;
+        let mut t_max = t_max;
+        for y in y0..=y1 {
+            for x in x0..=x1 {
+                if let Some((hit, part)) = self.intersect_texel(prism, ray, x, y, t_min, t_max) {
+                    t_max = hit.t;
+                    best = Some(SurfaceHit {
+                        hit,
+                        triangle: tri as u32,
+                        texel: [x, y],
+                        part,
+                    });
+                }
+            }
+        }
+        best
+    }
+
+    /// The nearest hit of `ray` with `t` in `[t_min, t_max]`: TLAS traversal (conservative
+    /// slab tests, nearest first), the exact ray-prism test as a gate, then the BLAS.
+    pub fn intersect(
+        &self,
+        ray: &Ray<T>,
+        t_min: T,
+        t_max: T,
+        stats: &mut TraversalStats,
+    ) -> Option<SurfaceHit<T>> {
+        let slab = SlabRay::new(ray.origin, ray.dir);
+        let mut best = None;
+        self.tlas.traverse(&slab, t_min, t_max, |tri, t_max| {
+            let prism = self.prism(tri as usize);
+            stats.prism_tests += 1;
+            intersect_prism(&prism, ray, t_min, t_max)?;
+            let nl = NonlinearRay::new(&prism, ray);
+            let hit = self.intersect_blas(tri as usize, &prism, &nl, t_min, t_max, stats)?;
+            best = Some(hit);
+            Some(hit.hit.t)
+        });
+        best
+    }
+
+    /// The nearest hit testing every texel of every triangle (no TLAS, no pyramid, no prism
+    /// gate): the reference for tests.
+    pub fn intersect_brute_force(&self, ray: &Ray<T>, t_min: T, t_max: T) -> Option<SurfaceHit<T>> {
+        let mut best: Option<SurfaceHit<T>> = None;
+        let mut t_max = t_max;
+        for tri in 0..self.mesh.triangle_count() {
+            let prism = self.prism(tri);
+            let nl = NonlinearRay::new(&prism, ray);
+            if let Some(hit) = self.intersect_blas_brute_force(tri, &prism, &nl, t_min, t_max) {
+                t_max = hit.hit.t;
+                best = Some(hit);
+            }
+        }
+        best
+    }
+
+    /// The world-space unit normal at a hit (Eq. 13), facing against the ray direction `dir`;
+    /// `None` where the shell degenerates to a line or point.
+    #[must_use]
+    pub fn normal(&self, hit: &SurfaceHit<T>, dir: T::Vec3) -> Option<T::Vec3> {
+        let prism = self.prism(hit.triangle as usize);
+        let ([u0, v0, u1, v1], [h00, h10, h01, h11]) =
+            self.texel_geometry(hit.texel[0], hit.texel[1]);
+        let p = |u: T, v: T, h: T| T::Vec3::new(u, v, h);
+        let plane = match hit.part {
+            TexelPart::Flat => TexturePlane {
+                normal: T::Vec3::new(T::ZERO, T::ZERO, T::ONE),
+                k: -h00,
+            },
+            TexelPart::Lower => {
+                TexturePlane::through(&[p(u0, v0, h00), p(u1, v0, h10), p(u1, v1, h11)])?
+            }
+            TexelPart::Upper => {
+                TexturePlane::through(&[p(u0, v0, h00), p(u1, v1, h11), p(u0, v1, h01)])?
+            }
+        };
+        let n = world_normal(
+            &prism,
+            &plane.canonical(&prism),
+            hit.hit.alpha,
+            hit.hit.beta,
+            hit.hit.h,
+        );
+        let len = n.length();
+        if !(len > T::ZERO && len.is_finite()) {
+            return None;
+        }
+        let n = n * (T::ONE / len);
+        Some(if n.dot(dir) > T::ZERO { -n } else { n })
+    }
+}
+
+/// The smallest level at which texels `floor(lo)..=floor(hi)` span at most 2 nodes per axis.
+fn root_nodes(lo: [f64; 2], hi: [f64; 2]) -> RootNodes {
+    let t0 = [lo[0].floor() as i32, lo[1].floor() as i32];
+    let t1 = [hi[0].floor() as i32, hi[1].floor() as i32];
+    let mut level = 0;
+    while ((t1[0] >> level) - (t0[0] >> level)) > 1 || ((t1[1] >> level) - (t0[1] >> level)) > 1 {
+        level += 1;
+    }
+    RootNodes {
+        level,
+        x: t0[0] >> level,
+        y: t0[1] >> level,
+        nx: ((t1[0] >> level) - (t0[0] >> level) + 1) as u8,
+        ny: ((t1[1] >> level) - (t0[1] >> level) + 1) as u8,
+        texels: [t0[0], t0[1], t1[0], t1[1]],
+    }
+}
+
+/// Whether the axis-aligned square `[lo, hi]` may meet the triangle `tri` (separating axis
+/// test over the triangle's three edge normals; the box axes are covered by the root's texel
+/// range). Conservative: a separation is accepted only beyond a bound on the rounding error
+/// of the projections (`gamma(5)` times the sum of the magnitudes of their terms), so a square
+/// touching the triangle within rounding is kept. Degenerate triangles (a line or a point in
+/// uv) keep every square that the texel range allows along their degenerate direction.
+fn square_meets_triangle<T: Real>(lo: [T; 2], hi: [T; 2], tri: &[[T; 2]; 3]) -> bool {
+    let five_u = T::from_i32(5) * T::UNIT_ROUNDOFF;
+    let gamma5 = five_u / (T::ONE - five_u);
+    for i in 0..3 {
+        let (a, b, c) = (tri[i], tri[(i + 1) % 3], tri[(i + 2) % 3]);
+        let n = [a[1] - b[1], b[0] - a[0]];
+        let side = n[0] * (c[0] - a[0]) + n[1] * (c[1] - a[1]);
+        let side_err = gamma5 * ((n[0] * (c[0] - a[0])).abs() + (n[1] * (c[1] - a[1])).abs());
+        if !(side.abs() > side_err) {
+            continue; // degenerate: this edge cannot separate
+        }
+        let s = if side > T::ZERO { T::ONE } else { -T::ONE };
+        let mut separated = true;
+        for corner in [
+            [lo[0], lo[1]],
+            [hi[0], lo[1]],
+            [lo[0], hi[1]],
+            [hi[0], hi[1]],
+        ] {
+            let (p0, p1) = (n[0] * (corner[0] - a[0]), n[1] * (corner[1] - a[1]));
+            let d = (p0 + p1) * s;
+            if !(d < -gamma5 * (p0.abs() + p1.abs())) {
+                separated = false;
+                break;
+            }
+        }
+        if separated {
+            return false;
+        }
+    }
+    true
+}
+
+impl<T: Real> DisplacedSurface<T> {
+    /// The prism boxes' union.
+    #[must_use]
+    pub fn bounds(&self) -> Aabb<T> {
+        self.tlas.bounds()
+    }
+}

@@ -1,0 +1,188 @@
+//! The base mesh of a shell: triangles with per-vertex positions, normals and texture
+//! coordinates. Prisms are built from it on the fly (sec. 5.2: the TLAS stores no prisms).
+
+use alloc::vec::Vec;
+use core::fmt;
+use nlrt_poly::{Real, Vector2, Vector3};
+use nlrt_shellmap::Prism;
+
+use crate::bvh::Aabb;
+
+/// Why a base mesh was rejected.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum MeshError {
+    /// The position, normal and uv arrays differ in length.
+    AttributeCountMismatch {
+        /// Positions.
+        positions: usize,
+        /// Normals.
+        normals: usize,
+        /// Texture coordinates.
+        uvs: usize,
+    },
+    /// A triangle names a vertex that does not exist.
+    IndexOutOfRange {
+        /// Triangle.
+        triangle: usize,
+        /// The bad index.
+        index: u32,
+    },
+    /// A vertex attribute is NaN or infinite.
+    NotFinite {
+        /// Vertex.
+        vertex: usize,
+        /// `"position"`, `"normal"` or `"uv"`.
+        attribute: &'static str,
+    },
+    /// No triangles.
+    Empty,
+}
+
+impl fmt::Display for MeshError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::AttributeCountMismatch {
+                positions,
+                normals,
+                uvs,
+            } => write!(
+                f,
+                "vertex attribute counts differ: {positions} positions, {normals} normals, {uvs} uvs"
+            ),
+            Self::IndexOutOfRange { triangle, index } => {
+                write!(
+                    f,
+                    "triangle {triangle} names vertex {index}, which does not exist"
+                )
+            }
+            Self::NotFinite { vertex, attribute } => {
+                write!(f, "vertex {vertex} has a NaN or infinite {attribute}")
+            }
+            Self::Empty => write!(f, "the mesh has no triangles"),
+        }
+    }
+}
+
+/// A triangle mesh with positions, normals and texture coordinates per vertex. Degenerate
+/// triangles (zero area in world space or in uv space) are allowed: the shell math handles
+/// them (Fig. 9 of the paper).
+#[derive(Clone, Debug)]
+pub struct BaseMesh<T: Real> {
+    positions: Vec<T::Vec3>,
+    normals: Vec<T::Vec3>,
+    uvs: Vec<T::Vec2>,
+    triangles: Vec<[u32; 3]>,
+}
+
+impl<T: Real> BaseMesh<T> {
+    /// A mesh, validated.
+    ///
+    /// # Errors
+    /// Mismatched attribute counts, out-of-range indices, non-finite attributes, no triangles.
+    pub fn new(
+        positions: Vec<T::Vec3>,
+        normals: Vec<T::Vec3>,
+        uvs: Vec<T::Vec2>,
+        triangles: Vec<[u32; 3]>,
+    ) -> Result<Self, MeshError> {
+        if positions.len() != normals.len() || positions.len() != uvs.len() {
+            return Err(MeshError::AttributeCountMismatch {
+                positions: positions.len(),
+                normals: normals.len(),
+                uvs: uvs.len(),
+            });
+        }
+        if triangles.is_empty() {
+            return Err(MeshError::Empty);
+        }
+        for (t, tri) in triangles.iter().enumerate() {
+            if let Some(&index) = tri.iter().find(|&&i| i as usize >= positions.len()) {
+                return Err(MeshError::IndexOutOfRange { triangle: t, index });
+            }
+        }
+        let finite3 = |v: T::Vec3| v.x().is_finite() && v.y().is_finite() && v.z().is_finite();
+        for vertex in 0..positions.len() {
+            let attribute = if !finite3(positions[vertex]) {
+                "position"
+            } else if !finite3(normals[vertex]) {
+                "normal"
+            } else if !(uvs[vertex].x().is_finite() && uvs[vertex].y().is_finite()) {
+                "uv"
+            } else {
+                continue;
+            };
+            return Err(MeshError::NotFinite { vertex, attribute });
+        }
+        Ok(Self {
+            positions,
+            normals,
+            uvs,
+            triangles,
+        })
+    }
+
+    /// Triangles.
+    #[must_use]
+    pub fn triangle_count(&self) -> usize {
+        self.triangles.len()
+    }
+
+    /// Vertex indices of triangle `i`.
+    #[must_use]
+    pub fn triangle(&self, i: usize) -> [u32; 3] {
+        self.triangles[i]
+    }
+
+    /// Vertex positions.
+    #[must_use]
+    pub fn positions(&self) -> &[T::Vec3] {
+        &self.positions
+    }
+
+    /// Vertex normals (not necessarily unit).
+    #[must_use]
+    pub fn normals(&self) -> &[T::Vec3] {
+        &self.normals
+    }
+
+    /// Vertex texture coordinates.
+    #[must_use]
+    pub fn uvs(&self) -> &[T::Vec2] {
+        &self.uvs
+    }
+
+    /// The prism of triangle `i` with normals scaled by `height_scale` and uvs by `uv_scale`.
+    #[must_use]
+    #[inline]
+    pub fn prism(&self, i: usize, height_scale: T, uv_scale: T) -> Prism<T> {
+        let [a, b, c] = self.triangles[i].map(|v| v as usize);
+        Prism::new(
+            [self.positions[a], self.positions[b], self.positions[c]],
+            [
+                self.normals[a] * height_scale,
+                self.normals[b] * height_scale,
+                self.normals[c] * height_scale,
+            ],
+            [
+                self.uvs[a] * uv_scale,
+                self.uvs[b] * uv_scale,
+                self.uvs[c] * uv_scale,
+            ],
+        )
+    }
+
+    /// Bytes of the mesh arrays.
+    #[must_use]
+    pub fn memory_bytes(&self) -> usize {
+        self.positions.len()
+            * (2 * core::mem::size_of::<T::Vec3>() + core::mem::size_of::<T::Vec2>())
+            + self.triangles.len() * 12
+    }
+}
+
+/// The box of a prism: its six corners `P_i` and `P_i + N_i` (every side is a bilinear patch
+/// between them, inside their convex hull, and the caps are triangles on them).
+#[must_use]
+pub fn prism_bounds<T: Real>(prism: &Prism<T>) -> Aabb<T> {
+    Aabb::of_points((0..3).flat_map(|i| [prism.p[i], prism.p[i] + prism.n[i]]))
+}
