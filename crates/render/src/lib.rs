@@ -1,6 +1,16 @@
 //! # nlrt-render
 //!
-//! Scenes, reports and the `nlrt` command-line tool. So far: the solver report
-//! ([`solvers`]); scenes and the renderer follow.
+//! Scenes, the renderer, reports and the `nlrt` command-line tool: the built-in scenes
+//! ([`scenes`]), the pre-tessellated reference ([`tessellate`]), the methods and the path
+//! tracer ([`trace`]), the speed-against-error report ([`report`]) and the solver report
+//! ([`solvers`]).
 
+
+// `!(a > b)` is deliberate: it is true when either side is NaN.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
+pub mod report;
+pub mod scenes;
 pub mod solvers;
+pub mod tessellate;
+pub mod trace;

@@ -1,10 +1,13 @@
 //! `nlrt`: the command-line tool of the nlrt workspace.
 //!
-//! With no arguments it runs the default job (for now the solver report; scenes come with the
-//! renderer).
+//! With no arguments it runs the default job: the built-in scenes at a small size through
+//! every method, and the report (Markdown and images) in `nlrt-report/`.
 
-use clap::{Parser, Subcommand};
+use clap::{Parser, Subcommand, ValueEnum};
+use nlrt_render::report::{self, ReportOptions};
+use nlrt_render::scenes::{self, SCENE_NAMES, Size};
 use nlrt_render::solvers;
+use nlrt_render::trace::{Method, RenderOptions};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -19,8 +22,107 @@ struct Cli {
     command: Option<Command>,
 }
 
+#[derive(Clone, Copy, Debug, ValueEnum)]
+enum Precision {
+    F32,
+    F64,
+}
+
+#[derive(Clone, Copy, Debug, ValueEnum)]
+enum SceneSize {
+    /// The paper's map sizes (4096^2; fur 256^2 tiled 8 x 8). The pre-tessellated reference
+    /// then needs several GB.
+    Paper,
+    /// Maps of a quarter of the side: quick runs.
+    Small,
+}
+
+impl From<SceneSize> for Size {
+    fn from(s: SceneSize) -> Self {
+        match s {
+            SceneSize::Paper => Size::Paper,
+            SceneSize::Small => Size::Small,
+        }
+    }
+}
+
+/// Image size `WxH`.
+fn parse_size(s: &str) -> Result<(usize, usize), String> {
+    let (w, h) = s
+        .split_once(['x', 'X'])
+        .ok_or_else(|| format!("'{s}' is not WIDTHxHEIGHT (e.g. 640x480)"))?;
+    let parse = |v: &str| {
+        v.parse::<usize>()
+            .ok()
+            .filter(|&n| (1..=16384).contains(&n))
+            .ok_or_else(|| format!("'{v}' is not a size between 1 and 16384"))
+    };
+    Ok((parse(w)?, parse(h)?))
+}
+
+#[derive(clap::Args, Clone)]
+struct RenderArgs {
+    /// Image size.
+    #[arg(long, value_parser = parse_size, default_value = "320x240")]
+    size: (usize, usize),
+    /// Samples per pixel.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=4096))]
+    spp: u32,
+    /// Diffuse bounces (each hit also casts a shadow ray).
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(0..=16))]
+    bounces: u32,
+    /// Map sizes of the built-in scenes.
+    #[arg(long, value_enum, default_value = "small")]
+    scene_size: SceneSize,
+}
+
+impl RenderArgs {
+    fn options(&self) -> RenderOptions {
+        RenderOptions {
+            width: self.size.0,
+            height: self.size.1,
+            spp: self.spp as usize,
+            bounces: self.bounces as usize,
+        }
+    }
+}
+
 #[derive(Subcommand)]
 enum Command {
+    /// Render a built-in scene with nonlinear ray tracing to a PNG.
+    Render {
+        /// Scene name: mountain, cylinder or fur.
+        scene: String,
+        /// Precision of the intersection.
+        #[arg(long, value_enum, default_value = "f32")]
+        precision: Precision,
+        #[command(flatten)]
+        args: RenderArgs,
+        /// Output PNG.
+        #[arg(short, long, default_value = "nlrt.png")]
+        output: PathBuf,
+    },
+    /// Speed, init time and memory per scene and method (no images written).
+    Bench {
+        /// Scenes (default: all built-in).
+        scenes: Vec<String>,
+        #[command(flatten)]
+        args: RenderArgs,
+        /// Leave out the pre-tessellated reference (its build dominates at paper sizes).
+        #[arg(long)]
+        no_reference: bool,
+    },
+    /// The full report: every scene and method, images, differences, and the solver table.
+    Report {
+        /// Output directory.
+        #[arg(short, long, default_value = "nlrt-report")]
+        output: PathBuf,
+        #[command(flatten)]
+        args: RenderArgs,
+        /// Random cubics per precision for the solver table.
+        #[arg(long, default_value_t = 50_000)]
+        solver_samples: usize,
+    },
     /// Speed against error of the cubic solvers (nlrt-poly, closed form, `roots` crate) for
     /// f32 and f64, judged by the MPFR oracle.
     Solvers {
@@ -39,15 +141,150 @@ enum Command {
     },
 }
 
+fn fail(command: &str, message: impl std::fmt::Display) -> ExitCode {
+    eprintln!("nlrt {command}: {message}");
+    ExitCode::from(2)
+}
+
+fn check_scenes(names: &[String]) -> Result<(), String> {
+    for n in names {
+        if !SCENE_NAMES.contains(&n.as_str()) {
+            return Err(format!(
+                "unknown scene '{n}' (built-in scenes: {})",
+                SCENE_NAMES.join(", ")
+            ));
+        }
+    }
+    Ok(())
+}
+
+fn report_command(output: PathBuf, args: &RenderArgs, solver_samples: usize) -> ExitCode {
+    if let Err(e) = std::fs::create_dir_all(&output) {
+        return fail("report", format!("cannot create {}: {e}", output.display()));
+    }
+    let opts = ReportOptions {
+        scenes: SCENE_NAMES.iter().map(|s| s.to_string()).collect(),
+        size: args.scene_size.into(),
+        render: args.options(),
+        methods: Method::ALL.to_vec(),
+        out_dir: Some(output.clone()),
+    };
+    let start = std::time::Instant::now();
+    let scenes_md = match report::run(&opts) {
+        Ok(md) => md,
+        Err(e) => return fail("report", e),
+    };
+    eprintln!("solver table ({solver_samples} cubics per precision)...");
+    let solver_opts = solvers::Options {
+        samples: solver_samples.max(1),
+        ..solvers::Options::default()
+    };
+    let solver_md = solvers::markdown(&solvers::run(&solver_opts), &solver_opts);
+    let md = format!(
+        "# nlrt report\n\nWritten by `nlrt report` in {:.0} s.\n\n{scenes_md}\n## Cubic solvers\n\n{solver_md}",
+        start.elapsed().as_secs_f64()
+    );
+    let path = output.join("report.md");
+    if let Err(e) = std::fs::write(&path, &md) {
+        return fail("report", format!("cannot write {}: {e}", path.display()));
+    }
+    print!("{md}");
+    eprintln!("report written to {}", path.display());
+    ExitCode::SUCCESS
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    let command = cli.command.unwrap_or(Command::Solvers {
-        samples: solvers::Options::default().samples,
-        seed: solvers::Options::default().seed,
-        passes: solvers::Options::default().passes,
-        output: None,
-    });
+    let Some(command) = cli.command else {
+        eprintln!("nlrt: no command given; running `nlrt report` (see `nlrt --help`)");
+        let args = RenderArgs {
+            size: (320, 240),
+            spp: 1,
+            bounces: 1,
+            scene_size: SceneSize::Small,
+        };
+        return report_command(PathBuf::from("nlrt-report"), &args, 50_000);
+    };
     match command {
+        Command::Render {
+            scene,
+            precision,
+            args,
+            output,
+        } => {
+            if let Err(e) = check_scenes(std::slice::from_ref(&scene)) {
+                return fail("render", e);
+            }
+            let Some(built) = scenes::builtin(&scene, args.scene_size.into()) else {
+                return fail("render", "unknown scene");
+            };
+            let method = match precision {
+                Precision::F32 => Method::NonlinearF32,
+                Precision::F64 => Method::NonlinearF64,
+            };
+            let opts = ReportOptions {
+                scenes: vec![scene.clone()],
+                size: args.scene_size.into(),
+                render: args.options(),
+                methods: vec![method],
+                out_dir: None,
+            };
+            let runs = report::run_scene(&built, &opts);
+            let run = &runs[0];
+            if let Err(e) = nlrt_render::trace::write_png(
+                &output,
+                run.frame.width,
+                run.frame.height,
+                &run.frame.rgb8(),
+            ) {
+                return fail("render", format!("cannot write {}: {e}", output.display()));
+            }
+            println!(
+                "{scene} ({method}): init {:.3} s, {:.3} Mrays/s ({} rays), written to {}",
+                run.init_seconds,
+                run.all_mrays(),
+                run.frame.all_rays,
+                output.display()
+            );
+            ExitCode::SUCCESS
+        }
+        Command::Bench {
+            scenes,
+            args,
+            no_reference,
+        } => {
+            let scenes = if scenes.is_empty() {
+                SCENE_NAMES.iter().map(|s| s.to_string()).collect()
+            } else {
+                scenes
+            };
+            if let Err(e) = check_scenes(&scenes) {
+                return fail("bench", e);
+            }
+            let methods = Method::ALL
+                .into_iter()
+                .filter(|&m| !(no_reference && m == Method::Tessellated))
+                .collect();
+            let opts = ReportOptions {
+                scenes,
+                size: args.scene_size.into(),
+                render: args.options(),
+                methods,
+                out_dir: None,
+            };
+            match report::run(&opts) {
+                Ok(md) => {
+                    print!("{md}");
+                    ExitCode::SUCCESS
+                }
+                Err(e) => fail("bench", e),
+            }
+        }
+        Command::Report {
+            output,
+            args,
+            solver_samples,
+        } => report_command(output, &args, solver_samples),
         Command::Solvers {
             samples,
             seed,
@@ -55,8 +292,7 @@ fn main() -> ExitCode {
             output,
         } => {
             if samples == 0 || passes == 0 {
-                eprintln!("nlrt solvers: --samples and --passes must be at least 1");
-                return ExitCode::from(2);
+                return fail("solvers", "--samples and --passes must be at least 1");
             }
             let opts = solvers::Options {
                 samples,
@@ -68,8 +304,7 @@ fn main() -> ExitCode {
             if let Some(path) = output
                 && let Err(e) = std::fs::write(&path, &table)
             {
-                eprintln!("nlrt solvers: cannot write {}: {e}", path.display());
-                return ExitCode::from(2);
+                return fail("solvers", format!("cannot write {}: {e}", path.display()));
             }
             ExitCode::SUCCESS
         }

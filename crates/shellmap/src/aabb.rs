@@ -32,9 +32,9 @@ const MAX_CANDIDATES: usize = 12;
 /// outside, so testing each candidate and each midpoint decides it exactly up to rounding.
 /// At a zero of the denominator the ray runs parallel to the prism's cross-section (its height
 /// is constant over a stretch of the ray): that height is kept as inside with the whole
-/// `[t_min, t_max]`, which is conservative. `t_in`/`t_out` are the extremes over the inside
-/// samples (candidates, the ends of inside pieces, their midpoints), not a bound over the whole
-/// inside curve.
+/// `[t_min, t_max]`, which is conservative. `t_in`/`t_out` come from the ends of the inside
+/// pieces, clamped to `[t_min, t_max]`: exact where the shell does not fold over itself
+/// (then the distance is monotonic along a piece), a sample otherwise.
 #[must_use]
 pub fn intersect_box<T: Real>(
     prism: &Prism<T>,
@@ -137,28 +137,37 @@ pub fn intersect_box<T: Real>(
         let ev = (abs_at(&mv, a) + v.abs() * d_abs) * inv;
         u >= lo[0] - eu && u <= hi[0] + eu && v >= lo[1] - ev && v <= hi[1] + ev
     };
-    let in_range = |t: T| t >= t_min && t <= t_max;
+    // Between consecutive candidates inside-ness cannot change, so the midpoint decides a
+    // whole piece, ends included (they lie on faces, where rounding alone could put them
+    // out). Off the poles the distance t(h) is continuous and, where the shell does not fold
+    // over itself, monotonic on a piece (a point of the ray has one height), so the piece's
+    // distances lie between those of its ends.
+    let mut previous_inside = false;
     for i in 0..candidates.len() {
         let c = candidates[i];
-        if inside(c)
-            && let Some(t) = distance(c).filter(|&t| in_range(t))
-        {
-            include(c, t, t);
-        }
-        // Between consecutive candidates inside-ness cannot change, so an inside midpoint
-        // puts the whole piece inside, ends included (they lie on faces, where rounding
-        // alone could put them out).
-        if i + 1 < candidates.len() {
+        let piece_inside = i + 1 < candidates.len() && {
             let next = candidates[i + 1];
-            let mid = (c + next) * T::HALF;
-            if inside(mid) {
-                for h in [c, mid, next] {
-                    if let Some(t) = distance(h).filter(|&t| in_range(t)) {
-                        include(h, t, t);
-                    }
+            next > c && inside((c + next) * T::HALF)
+        };
+        if piece_inside {
+            let next = candidates[i + 1];
+            if let (Some(ta), Some(tb)) = (distance(c), distance(next)) {
+                let (lo_t, hi_t) = (ta.min(tb).max(t_min), ta.max(tb).min(t_max));
+                if lo_t <= hi_t {
+                    // The heights at the clamped distances are not needed: the piece's full
+                    // height range is kept (conservative).
+                    include(c, lo_t, hi_t);
+                    include(next, lo_t, hi_t);
                 }
             }
+        } else if !previous_inside
+            && inside(c)
+            && let Some(t) = distance(c).filter(|&t| t >= t_min && t <= t_max)
+        {
+            // An isolated inside point: the curve touches the box at a face or edge.
+            include(c, t, t);
         }
+        previous_inside = piece_inside;
     }
     span
 }

@@ -1,0 +1,312 @@
+//! `nlrt report` and `nlrt bench`: per scene and method, speed (Mrays/s of primary and of all
+//! rays), init time, memory, and error against the f64 pre-tessellated reference (hit/miss
+//! mismatches and depth error of the primary rays), with images.
+
+use crate::scenes::{self, Scene, Size};
+use crate::tessellate::Tessellated;
+use crate::trace::{Frame, Method, Nonlinear, RenderOptions, Tracer, render, write_png};
+use std::fmt::Write as _;
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Error of a frame's primary rays against a reference frame.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ErrorStats {
+    /// Pixels where one frame hits and the other misses.
+    pub mismatches: usize,
+    /// Pixels compared.
+    pub pixels: usize,
+    /// Median relative depth difference over pixels both hit.
+    pub depth_median: f64,
+    /// 99th percentile of the relative depth difference.
+    pub depth_p99: f64,
+    /// Largest relative depth difference.
+    pub depth_max: f64,
+}
+
+impl ErrorStats {
+    /// Mismatch rate.
+    #[must_use]
+    pub fn mismatch_rate(&self) -> f64 {
+        self.mismatches as f64 / self.pixels.max(1) as f64
+    }
+}
+
+/// Compares the primary-ray depths of `frame` with `reference`.
+#[must_use]
+pub fn compare(frame: &Frame, reference: &Frame) -> ErrorStats {
+    let mut rel = Vec::new();
+    let mut mismatches = 0;
+    for (&a, &b) in frame.depth.iter().zip(&reference.depth) {
+        match (a.is_nan(), b.is_nan()) {
+            (true, true) => {}
+            (false, false) => rel.push((a - b).abs() / b.abs().max(1e-300)),
+            _ => mismatches += 1,
+        }
+    }
+    rel.sort_by(f64::total_cmp);
+    let q = |p: f64| {
+        if rel.is_empty() {
+            0.0
+        } else {
+            rel[((rel.len() - 1) as f64 * p).round() as usize]
+        }
+    };
+    ErrorStats {
+        mismatches,
+        pixels: frame.depth.len(),
+        depth_median: q(0.5),
+        depth_p99: q(0.99),
+        depth_max: q(1.0),
+    }
+}
+
+/// One method on one scene.
+#[derive(Clone, Debug)]
+pub struct MethodRun {
+    /// The method.
+    pub method: Method,
+    /// Seconds to build its acceleration data (time to first pixel).
+    pub init_seconds: f64,
+    /// Bytes of its acceleration data.
+    pub memory_bytes: usize,
+    /// The frame.
+    pub frame: Frame,
+}
+
+impl MethodRun {
+    /// Million primary rays per second.
+    #[must_use]
+    pub fn primary_mrays(&self) -> f64 {
+        self.frame.primary_rays as f64 / self.frame.seconds / 1e6
+    }
+
+    /// Million rays (all kinds) per second.
+    #[must_use]
+    pub fn all_mrays(&self) -> f64 {
+        self.frame.all_rays as f64 / self.frame.seconds / 1e6
+    }
+}
+
+/// Options of a report or bench run.
+#[derive(Clone, Debug)]
+pub struct ReportOptions {
+    /// Scene names.
+    pub scenes: Vec<String>,
+    /// Scene sizes.
+    pub size: Size,
+    /// Render settings.
+    pub render: RenderOptions,
+    /// Methods.
+    pub methods: Vec<Method>,
+    /// Where images and the report go (`None`: nowhere).
+    pub out_dir: Option<PathBuf>,
+}
+
+fn progress_printer(label: String, rows: usize) -> impl Fn(usize) + Sync {
+    let terminal = std::io::stderr().is_terminal();
+    move |done: usize| {
+        if terminal && (done.is_multiple_of(8) || done == rows) {
+            eprint!("\r  {label}: {done}/{rows} rows   ");
+            if done == rows {
+                eprintln!();
+            }
+        }
+    }
+}
+
+/// Builds `method`'s tracer for `scene`, timed.
+fn build(scene: &Scene, method: Method) -> (Box<dyn Tracer>, f64) {
+    let start = Instant::now();
+    let tracer: Box<dyn Tracer> = match method {
+        Method::NonlinearF32 => Box::new(Nonlinear::<f32>::new(scene)),
+        Method::NonlinearF64 => Box::new(Nonlinear::<f64>::new(scene)),
+        Method::Tessellated => Box::new(Tessellated::new(scene)),
+    };
+    (tracer, start.elapsed().as_secs_f64())
+}
+
+/// Renders `scene` with every method of `opts`.
+#[must_use]
+pub fn run_scene(scene: &Scene, opts: &ReportOptions) -> Vec<MethodRun> {
+    opts.methods
+        .iter()
+        .map(|&method| {
+            eprintln!("  {}: building {method}", scene.name);
+            let (tracer, init_seconds) = build(scene, method);
+            let label = format!("{} {method}", scene.name);
+            let frame = render(
+                scene,
+                tracer.as_ref(),
+                &opts.render,
+                &progress_printer(label, opts.render.height),
+            );
+            MethodRun {
+                method,
+                init_seconds,
+                memory_bytes: tracer.memory_bytes(),
+                frame,
+            }
+        })
+        .collect()
+}
+
+fn mib(bytes: usize) -> f64 {
+    bytes as f64 / (1024.0 * 1024.0)
+}
+
+/// A difference image: `4 |a - b|` per channel; pixels where one hits and the other misses
+/// in magenta.
+fn difference_image(a: &Frame, b: &Frame) -> Vec<u8> {
+    let mut out = Vec::with_capacity(a.color.len() * 3);
+    for i in 0..a.color.len() {
+        if a.depth[i].is_nan() != b.depth[i].is_nan() {
+            out.extend([255, 0, 255]);
+            continue;
+        }
+        for c in 0..3 {
+            let d = (a.color[i][c] - b.color[i][c]).abs() * 4.0;
+            out.push((d.clamp(0.0, 1.0) * 255.0 + 0.5) as u8);
+        }
+    }
+    out
+}
+
+/// The target features this binary was compiled with (FMA matters for the solvers).
+#[must_use]
+pub fn target_features() -> String {
+    let mut f = Vec::new();
+    if cfg!(target_feature = "fma") {
+        f.push("fma");
+    }
+    if cfg!(target_feature = "avx2") {
+        f.push("avx2");
+    }
+    if cfg!(target_feature = "sse4.2") {
+        f.push("sse4.2");
+    }
+    if f.is_empty() {
+        "none beyond the baseline".into()
+    } else {
+        f.join(", ")
+    }
+}
+
+/// Runs every scene and writes images (when `out_dir` is set); returns the Markdown tables.
+///
+/// # Errors
+/// An unknown scene name, or an image that cannot be written.
+pub fn run(opts: &ReportOptions) -> Result<String, String> {
+    let mut md = String::new();
+    let r = &opts.render;
+    let _ = writeln!(
+        md,
+        "## Scenes\n\n{}x{} pixels, {} spp, {} bounce(s) with a shadow ray per hit; {} threads; target features: {}. \
+         Scene size: {:?}. Error columns compare primary-ray depths with the f64 pre-tessellated reference \
+         (a different surface by design: flat world triangles through mapped vertices) and with nonlinear f64 \
+         (the precision error alone).\n",
+        r.width,
+        r.height,
+        r.spp,
+        r.bounces,
+        rayon::current_num_threads(),
+        target_features(),
+        opts.size
+    );
+    let _ = writeln!(
+        md,
+        "| scene | method | init s | accel MiB | Mrays/s primary | Mrays/s all | miss/hit mismatch vs ref | depth err vs ref median / p99 | mismatch vs nl f64 | depth err vs nl f64 p99 / max |"
+    );
+    let _ = writeln!(md, "|---|---|---|---|---|---|---|---|---|---|");
+    for name in &opts.scenes {
+        let Some(scene) = scenes::builtin(name, opts.size) else {
+            return Err(format!(
+                "unknown scene '{name}' (built-in scenes: {})",
+                scenes::SCENE_NAMES.join(", ")
+            ));
+        };
+        eprintln!(
+            "scene {name}: {} base triangles, {}^2 map",
+            scene.triangles.len(),
+            scene.field.side()
+        );
+        let runs = run_scene(&scene, opts);
+        let reference = runs.iter().find(|m| m.method == Method::Tessellated);
+        let nl64 = runs.iter().find(|m| m.method == Method::NonlinearF64);
+        for m in &runs {
+            let vs = |other: Option<&MethodRun>| other.map(|o| compare(&m.frame, &o.frame));
+            let (e_ref, e_64) = (vs(reference), vs(nl64));
+            let fmt_rate = |e: Option<ErrorStats>| {
+                e.map_or("-".into(), |e| {
+                    format!("{:.4}% ({})", 100.0 * e.mismatch_rate(), e.mismatches)
+                })
+            };
+            let _ = writeln!(
+                md,
+                "| {name} | {} | {:.3} | {:.1} | {:.3} | {:.3} | {} | {} | {} | {} |",
+                m.method,
+                m.init_seconds,
+                mib(m.memory_bytes),
+                m.primary_mrays(),
+                m.all_mrays(),
+                fmt_rate(e_ref),
+                e_ref.map_or("-".into(), |e| format!(
+                    "{:.1e} / {:.1e}",
+                    e.depth_median, e.depth_p99
+                )),
+                fmt_rate(e_64),
+                e_64.map_or("-".into(), |e| format!(
+                    "{:.1e} / {:.1e}",
+                    e.depth_p99, e.depth_max
+                )),
+            );
+            if let Some(dir) = &opts.out_dir {
+                let path = dir.join(format!("{name}-{}.png", m.method.slug()));
+                write_png(&path, m.frame.width, m.frame.height, &m.frame.rgb8())
+                    .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+                if let Some(reference) = reference.filter(|_| m.method != Method::Tessellated) {
+                    let path = dir.join(format!("{name}-{}-diff.png", m.method.slug()));
+                    write_png(
+                        &path,
+                        m.frame.width,
+                        m.frame.height,
+                        &difference_image(&m.frame, &reference.frame),
+                    )
+                    .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+                }
+            }
+        }
+    }
+    if let Some(dir) = &opts.out_dir {
+        let _ = writeln!(md, "\n### Images\n");
+        for name in &opts.scenes {
+            let cells: Vec<String> = opts
+                .methods
+                .iter()
+                .map(|m| format!("![{name} {m}]({name}-{}.png)", m.slug()))
+                .collect();
+            let _ = writeln!(md, "{name}: {}\n", cells.join(" "));
+            let diffs: Vec<String> = opts
+                .methods
+                .iter()
+                .filter(|&&m| m != Method::Tessellated)
+                .map(|m| {
+                    format!(
+                        "![{name} {m} minus reference]({name}-{}-diff.png)",
+                        m.slug()
+                    )
+                })
+                .collect();
+            if opts.methods.contains(&Method::Tessellated) {
+                let _ = writeln!(
+                    md,
+                    "{name} differences from the reference (x4; magenta: hit/miss mismatch): {}\n",
+                    diffs.join(" ")
+                );
+            }
+        }
+        let _ = Path::new(dir);
+    }
+    Ok(md)
+}

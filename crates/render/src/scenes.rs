@@ -1,0 +1,309 @@
+//! The built-in scenes: procedural analogues of the paper's Table 2 displacement scenes
+//! (nothing is downloaded). Each is a base mesh with normals and uvs, a height map, a height
+//! scale, a tiling and a camera.
+
+use nlrt_accel::{BaseMesh, HeightField, Wrap};
+use nlrt_poly::glam::{DVec2, DVec3};
+use rayon::prelude::*;
+use std::f64::consts::TAU;
+
+/// A displacement scene in f64 (converted per precision when built).
+#[derive(Clone, Debug)]
+pub struct Scene {
+    /// Name (`mountain`, `cylinder`, `fur`).
+    pub name: &'static str,
+    /// Base mesh positions.
+    pub positions: Vec<DVec3>,
+    /// Base mesh normals (unit; the shell's thickness is `height_scale`).
+    pub normals: Vec<DVec3>,
+    /// Texture coordinates.
+    pub uvs: Vec<DVec2>,
+    /// Triangles.
+    pub triangles: Vec<[u32; 3]>,
+    /// Height map.
+    pub field: HeightField,
+    /// World height of a sample of 1.
+    pub height_scale: f64,
+    /// Height-map repeats per unit of uv.
+    pub tiling: f64,
+    /// Camera.
+    pub camera: Camera,
+    /// Direction towards the sun (unit).
+    pub sun: DVec3,
+}
+
+/// A pinhole camera.
+#[derive(Clone, Copy, Debug)]
+pub struct Camera {
+    /// Eye.
+    pub eye: DVec3,
+    /// Point looked at.
+    pub target: DVec3,
+    /// Vertical field of view, degrees.
+    pub fov_degrees: f64,
+}
+
+impl Camera {
+    /// The unit direction through image point `(x, y)` in `[0, 1]^2` (y down) for an image of
+    /// aspect `width / height`.
+    #[must_use]
+    pub fn direction(&self, x: f64, y: f64, aspect: f64) -> DVec3 {
+        let forward = (self.target - self.eye).normalize();
+        let up_hint = if forward.y.abs() > 0.99 {
+            DVec3::Z
+        } else {
+            DVec3::Y
+        };
+        let right = forward.cross(up_hint).normalize();
+        let up = right.cross(forward);
+        let half = (self.fov_degrees.to_radians() * 0.5).tan();
+        (forward + right * ((2.0 * x - 1.0) * half * aspect) + up * ((1.0 - 2.0 * y) * half))
+            .normalize()
+    }
+}
+
+/// Names of the built-in scenes.
+pub const SCENE_NAMES: [&str; 3] = ["mountain", "cylinder", "fur"];
+
+/// Sizes of a built-in scene: the paper's, or reduced for quick runs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Size {
+    /// The paper's sizes (4096^2 maps; the fur's 256^2 spikes tiled 8 x 8).
+    Paper,
+    /// Maps a quarter of the side (the fur's 64^2), same meshes.
+    Small,
+}
+
+/// The built-in scene `name` at `size`; `None` for an unknown name.
+#[must_use]
+pub fn builtin(name: &str, size: Size) -> Option<Scene> {
+    let big = size == Size::Paper;
+    match name {
+        "mountain" => Some(mountain(if big { 4096 } else { 1024 })),
+        "cylinder" => Some(cylinder(if big { 4096 } else { 1024 })),
+        "fur" => Some(fur(if big { 256 } else { 64 })),
+        _ => None,
+    }
+}
+
+/// A hash of a lattice point to `[0, 1)`.
+fn lattice(i: i64, j: i64, seed: u64) -> f64 {
+    let mut z = (i as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15)
+        ^ (j as u64).wrapping_mul(0xc2b2_ae3d_27d4_eb4f)
+        ^ seed;
+    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    (z ^ (z >> 31)) as f64 / u64::MAX as f64
+}
+
+/// Periodic value noise with period `period` lattice cells, smooth (quintic) interpolation.
+fn value_noise(x: f64, y: f64, period: i64, seed: u64) -> f64 {
+    let (fx, fy) = (x.floor(), y.floor());
+    let (i, j) = (fx as i64, fy as i64);
+    let s = |t: f64| t * t * t * (t * (t * 6.0 - 15.0) + 10.0);
+    let (tx, ty) = (s(x - fx), s(y - fy));
+    let at = |a: i64, b: i64| lattice(a.rem_euclid(period), b.rem_euclid(period), seed);
+    let top = at(i, j) + (at(i + 1, j) - at(i, j)) * tx;
+    let bottom = at(i, j + 1) + (at(i + 1, j + 1) - at(i, j + 1)) * tx;
+    top + (bottom - top) * ty
+}
+
+/// A tileable fBm height map (`octaves` of value noise, gain 0.5), normalised to `[0, 1]`.
+#[must_use]
+pub fn fbm_map(side: usize, base_period: i64, octaves: u32, seed: u64) -> Vec<f32> {
+    let rows: Vec<Vec<f64>> = (0..side)
+        .into_par_iter()
+        .map(|j| {
+            (0..side)
+                .map(|i| {
+                    let (mut sum, mut amp, mut period) = (0.0, 1.0, base_period);
+                    for o in 0..octaves {
+                        let scale = period as f64 / side as f64;
+                        sum += amp
+                            * value_noise(
+                                i as f64 * scale,
+                                j as f64 * scale,
+                                period,
+                                seed + u64::from(o),
+                            );
+                        amp *= 0.5;
+                        period *= 2;
+                    }
+                    sum
+                })
+                .collect()
+        })
+        .collect();
+    let (lo, hi) = rows
+        .iter()
+        .flatten()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+            (a.min(v), b.max(v))
+        });
+    let span = (hi - lo).max(f64::MIN_POSITIVE);
+    rows.iter()
+        .flatten()
+        .map(|&v| ((v - lo) / span) as f32)
+        .collect()
+}
+
+/// A spike map for fur: a cone of radius `radius` texels around a jittered centre in each
+/// cell of `cells x cells`, heights 1 at the tip.
+#[must_use]
+pub fn spike_map(side: usize, cells: usize, radius: f64, seed: u64) -> Vec<f32> {
+    let cell = side as f64 / cells as f64;
+    let centres: Vec<(f64, f64)> = (0..cells * cells)
+        .map(|k| {
+            let (i, j) = ((k % cells) as i64, (k / cells) as i64);
+            (
+                (i as f64 + 0.25 + 0.5 * lattice(i, j, seed)) * cell,
+                (j as f64 + 0.25 + 0.5 * lattice(i, j, seed + 1)) * cell,
+            )
+        })
+        .collect();
+    (0..side * side)
+        .map(|k| {
+            let (x, y) = ((k % side) as f64, (k / side) as f64);
+            let (ci, cj) = ((x / cell) as usize, (y / cell) as usize);
+            let (cx, cy) = centres[cj.min(cells - 1) * cells + ci.min(cells - 1)];
+            let d = ((x - cx).powi(2) + (y - cy).powi(2)).sqrt();
+            (1.0 - d / radius).max(0.0) as f32
+        })
+        .collect()
+}
+
+fn field(side: usize, heights: &[f32]) -> HeightField {
+    HeightField::from_unit_heights(side, heights, Wrap::Repeat).expect("power-of-two side")
+}
+
+/// (a) Mountain: 2 base triangles, an fBm map.
+#[must_use]
+pub fn mountain(side: usize) -> Scene {
+    let p = [
+        DVec3::new(-1.0, 0.0, -1.0),
+        DVec3::new(1.0, 0.0, -1.0),
+        DVec3::new(1.0, 0.0, 1.0),
+        DVec3::new(-1.0, 0.0, 1.0),
+    ];
+    let uvs = p
+        .iter()
+        .map(|p| DVec2::new((p.x + 1.0) * 0.5, (p.z + 1.0) * 0.5))
+        .collect();
+    Scene {
+        name: "mountain",
+        positions: p.to_vec(),
+        normals: vec![DVec3::Y; 4],
+        uvs,
+        triangles: vec![[0, 2, 1], [0, 3, 2]],
+        field: field(side, &fbm_map(side, 4, 8, 11)),
+        height_scale: 0.3,
+        tiling: 1.0,
+        camera: Camera {
+            eye: DVec3::new(0.0, 2.0, 2.4),
+            target: DVec3::new(0.0, 0.05, 0.0),
+            fov_degrees: 45.0,
+        },
+        sun: DVec3::new(0.5, 0.7, 0.3).normalize(),
+    }
+}
+
+/// A grid surface `(i, j) -> (position, normal, uv)` over `n_u x n_v` quads.
+fn grid(
+    n_u: usize,
+    n_v: usize,
+    at: impl Fn(f64, f64) -> (DVec3, DVec3),
+) -> (Vec<DVec3>, Vec<DVec3>, Vec<DVec2>, Vec<[u32; 3]>) {
+    let (mut p, mut n, mut uv, mut tris) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    // Seams get duplicated vertices (u = 1 next to u = 0), so uvs are continuous per triangle.
+    for j in 0..=n_v {
+        for i in 0..=n_u {
+            let (u, v) = (i as f64 / n_u as f64, j as f64 / n_v as f64);
+            let (pos, nor) = at(u, v);
+            p.push(pos);
+            n.push(nor);
+            uv.push(DVec2::new(u, v));
+        }
+    }
+    let idx = |i: usize, j: usize| (j * (n_u + 1) + i) as u32;
+    for j in 0..n_v {
+        for i in 0..n_u {
+            tris.push([idx(i, j), idx(i + 1, j), idx(i + 1, j + 1)]);
+            tris.push([idx(i, j), idx(i + 1, j + 1), idx(i, j + 1)]);
+        }
+    }
+    (p, n, uv, tris)
+}
+
+/// (b) Cylinder: 512 base triangles (16 around x 16 along), an fBm map wrapped around it.
+#[must_use]
+pub fn cylinder(side: usize) -> Scene {
+    let (positions, normals, uvs, triangles) = grid(16, 16, |u, v| {
+        let a = TAU * u;
+        let n = DVec3::new(a.cos(), 0.0, a.sin());
+        (n * 0.6 + DVec3::Y * (v * 2.0 - 1.0), n)
+    });
+    Scene {
+        name: "cylinder",
+        positions,
+        normals,
+        uvs,
+        triangles,
+        field: field(side, &fbm_map(side, 8, 9, 23)),
+        height_scale: 0.12,
+        tiling: 1.0,
+        camera: Camera {
+            eye: DVec3::new(0.0, 0.6, 3.2),
+            target: DVec3::ZERO,
+            fov_degrees: 45.0,
+        },
+        sun: DVec3::new(-0.4, 0.6, 0.7).normalize(),
+    }
+}
+
+/// (c) Torus fur: 8,192 base triangles (64 x 64 quads), a spike map tiled 8 x 8.
+#[must_use]
+pub fn fur(side: usize) -> Scene {
+    let (r_major, r_minor) = (1.0, 0.35);
+    let (positions, normals, uvs, triangles) = grid(64, 64, |u, v| {
+        let (a, b) = (TAU * u, TAU * v);
+        let centre = DVec3::new(a.cos(), 0.0, a.sin()) * r_major;
+        let n = DVec3::new(a.cos() * b.cos(), b.sin(), a.sin() * b.cos());
+        (centre + n * r_minor, n)
+    });
+    Scene {
+        name: "fur",
+        positions,
+        normals,
+        uvs,
+        triangles,
+        field: field(side, &spike_map(side, side / 8, side as f64 / 24.0, 5)),
+        height_scale: 0.12,
+        tiling: 8.0,
+        camera: Camera {
+            eye: DVec3::new(0.0, 1.9, 2.4),
+            target: DVec3::new(0.0, -0.1, 0.0),
+            fov_degrees: 45.0,
+        },
+        sun: DVec3::new(0.3, 0.8, 0.5).normalize(),
+    }
+}
+
+impl Scene {
+    /// The base mesh in precision `T`.
+    ///
+    /// # Panics
+    /// Never for the built-in scenes (their meshes are valid by construction).
+    #[must_use]
+    pub fn mesh<T: nlrt_poly::Real>(&self) -> BaseMesh<T> {
+        use nlrt_poly::{Vector2, Vector3};
+        let v3 = |v: &DVec3| T::Vec3::new(T::from_f64(v.x), T::from_f64(v.y), T::from_f64(v.z));
+        let v2 = |v: &DVec2| T::Vec2::new(T::from_f64(v.x), T::from_f64(v.y));
+        BaseMesh::new(
+            self.positions.iter().map(v3).collect(),
+            self.normals.iter().map(v3).collect(),
+            self.uvs.iter().map(v2).collect(),
+            self.triangles.clone(),
+        )
+        .expect("built-in meshes are valid")
+    }
+}

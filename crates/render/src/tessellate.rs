@@ -1,0 +1,195 @@
+//! The pre-tessellated reference: every microtriangle clipped to its base triangle in uv,
+//! mapped to world space by Eq. 1 at its vertices, and put in a world-space BVH (the
+//! approach the paper compares against, Table 2). It is a different surface from the
+//! nonlinear one by design (flat world triangles instead of the curved images of flat
+//! microtriangles); the report states their distance.
+
+use crate::scenes::Scene;
+use nlrt_accel::{Aabb, Bvh4, HEIGHT_ONE, SlabRay};
+use nlrt_poly::glam::{DVec2, DVec3};
+use rayon::prelude::*;
+
+/// World-space triangles of the tessellated displaced surface with their BVH.
+pub struct Tessellated {
+    triangles: Vec<[DVec3; 3]>,
+    bvh: Bvh4<f64>,
+    /// Base triangles skipped because their uvs are degenerate (no inverse of Eq. 2-3).
+    pub skipped_uv_degenerate: usize,
+}
+
+/// A vertex `(u, v, h)` in texel units.
+type Uvh = [f64; 3];
+
+/// Clips a convex polygon to the half-plane `n . (p - a) >= 0` in uv.
+fn clip(poly: &[Uvh], a: DVec2, n: DVec2) -> Vec<Uvh> {
+    let side = |p: &Uvh| n.dot(DVec2::new(p[0], p[1]) - a);
+    let mut out = Vec::with_capacity(poly.len() + 1);
+    for i in 0..poly.len() {
+        let (p, q) = (&poly[i], &poly[(i + 1) % poly.len()]);
+        let (sp, sq) = (side(p), side(q));
+        if sp >= 0.0 {
+            out.push(*p);
+        }
+        if (sp >= 0.0) != (sq >= 0.0) {
+            let t = sp / (sp - sq);
+            out.push(core::array::from_fn(|k| p[k] + (q[k] - p[k]) * t));
+        }
+    }
+    out
+}
+
+impl Tessellated {
+    /// Tessellates `scene` (in parallel over texel rows).
+    #[must_use]
+    pub fn new(scene: &Scene) -> Self {
+        let side = scene.field.side() as f64;
+        let scale = scene.tiling * side;
+        // (base triangle, texel row) jobs.
+        let mut jobs = Vec::new();
+        let mut skipped = 0;
+        let mut bases = Vec::new();
+        for (b, tri) in scene.triangles.iter().enumerate() {
+            let t = tri.map(|v| scene.uvs[v as usize] * scale);
+            let det = (t[1] - t[0]).perp_dot(t[2] - t[0]);
+            let size = (t[1] - t[0])
+                .length_squared()
+                .max((t[2] - t[0]).length_squared());
+            // Below this the inverse of Eq. 2-3 loses all digits: uv-degenerate.
+            if !(det.abs() > 1e-12 * size) {
+                skipped += 1;
+                continue;
+            }
+            let lo = t[0].min(t[1]).min(t[2]).floor();
+            let hi = t[0].max(t[1]).max(t[2]).floor();
+            for y in lo.y as i64..=hi.y as i64 {
+                jobs.push((b, y, lo.x as i64, hi.x as i64));
+            }
+            bases.push((b, t, det));
+        }
+        let base_of = |b: usize| bases.iter().find(|x| x.0 == b).copied();
+        let triangles: Vec<[DVec3; 3]> = jobs
+            .par_iter()
+            .flat_map_iter(|&(b, y, x0, x1)| {
+                let (_, t, det) = base_of(b).expect("job of a kept triangle");
+                let tri = scene.triangles[b];
+                let (p, n) = (
+                    tri.map(|v| scene.positions[v as usize]),
+                    tri.map(|v| scene.normals[v as usize] * scene.height_scale),
+                );
+                let orient = det.signum();
+                let edges: [(DVec2, DVec2); 3] = core::array::from_fn(|i| {
+                    let (a, c) = (t[i], t[(i + 1) % 3]);
+                    let e = c - a;
+                    (a, DVec2::new(-e.y, e.x) * orient)
+                });
+                let world = move |q: &Uvh| {
+                    let d = DVec2::new(q[0], q[1]) - t[0];
+                    let alpha = d.perp_dot(t[2] - t[0]) / det;
+                    let beta = (t[1] - t[0]).perp_dot(d) / det;
+                    let h = q[2];
+                    let at = |k: usize| p[k] + n[k] * h;
+                    at(0) + (at(1) - at(0)) * alpha + (at(2) - at(0)) * beta
+                };
+                let mut out = Vec::new();
+                for x in x0..=x1 {
+                    let c = scene.field.texel_corners(x, y);
+                    let h = c.map(|s| f64::from(s) / f64::from(HEIGHT_ONE));
+                    let (u0, v0, u1, v1) = (x as f64, y as f64, x as f64 + 1.0, y as f64 + 1.0);
+                    let micro = [
+                        [[u0, v0, h[0]], [u1, v0, h[1]], [u1, v1, h[3]]],
+                        [[u0, v0, h[0]], [u1, v1, h[3]], [u0, v1, h[2]]],
+                    ];
+                    for m in micro {
+                        let mut poly = m.to_vec();
+                        for &(a, nrm) in &edges {
+                            poly = clip(&poly, a, nrm);
+                            if poly.len() < 3 {
+                                break;
+                            }
+                        }
+                        if poly.len() < 3 {
+                            continue;
+                        }
+                        let w: Vec<DVec3> = poly.iter().map(world).collect();
+                        for k in 1..w.len() - 1 {
+                            out.push([w[0], w[k], w[k + 1]]);
+                        }
+                    }
+                }
+                out
+            })
+            .collect();
+        let boxes: Vec<Aabb<f64>> = triangles
+            .par_iter()
+            .map(|t| Aabb::of_points(t.iter().copied()))
+            .collect();
+        let bvh = Bvh4::build(&boxes, 4);
+        Self {
+            triangles,
+            bvh,
+            skipped_uv_degenerate: skipped,
+        }
+    }
+
+    /// Triangles.
+    #[must_use]
+    pub fn triangle_count(&self) -> usize {
+        self.triangles.len()
+    }
+
+    /// Bytes of triangles and BVH.
+    #[must_use]
+    pub fn memory_bytes(&self) -> usize {
+        self.triangles.len() * std::mem::size_of::<[DVec3; 3]>() + self.bvh.memory_bytes()
+    }
+
+    /// Nearest hit in `(t_min, t_max]`: distance and geometric normal facing the ray.
+    #[must_use]
+    pub fn intersect(
+        &self,
+        origin: DVec3,
+        dir: DVec3,
+        t_min: f64,
+        t_max: f64,
+    ) -> Option<(f64, DVec3)> {
+        let slab = SlabRay::new(origin, dir);
+        let mut best = None;
+        self.bvh.traverse(&slab, t_min, t_max, |i, t_max| {
+            let tri = &self.triangles[i as usize];
+            let t = moller_trumbore(tri, origin, dir)?;
+            if t > t_min && t < t_max {
+                best = Some(i);
+                Some(t)
+            } else {
+                None
+            }
+        });
+        let i = best?;
+        let tri = &self.triangles[i as usize];
+        let t = moller_trumbore(tri, origin, dir)?;
+        let n = (tri[1] - tri[0]).cross(tri[2] - tri[0]).normalize_or_zero();
+        Some((t, if n.dot(dir) > 0.0 { -n } else { n }))
+    }
+}
+
+/// Möller-Trumbore ray-triangle distance (edges included); `None` when parallel or outside.
+fn moller_trumbore(tri: &[DVec3; 3], o: DVec3, d: DVec3) -> Option<f64> {
+    let (e1, e2) = (tri[1] - tri[0], tri[2] - tri[0]);
+    let p = d.cross(e2);
+    let det = e1.dot(p);
+    if det == 0.0 || !det.is_finite() {
+        return None;
+    }
+    let inv = 1.0 / det;
+    let s = o - tri[0];
+    let u = s.dot(p) * inv;
+    if !(0.0..=1.0).contains(&u) {
+        return None;
+    }
+    let q = s.cross(e1);
+    let v = d.dot(q) * inv;
+    if !(v >= 0.0 && u + v <= 1.0) {
+        return None;
+    }
+    Some(e2.dot(q) * inv)
+}
