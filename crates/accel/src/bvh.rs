@@ -143,6 +143,9 @@ const MEDIAN_AFTER_DEPTH: usize = 40;
 /// depth is at most the binary depth (< 40 + 32).
 const STACK: usize = 3 * (MEDIAN_AFTER_DEPTH + 32) + 1;
 
+/// Nodes of at most this many primitives are split at the median instead of by SAH.
+const SMALL_NODE: usize = 8;
+
 /// Bins of the SAH sweep.
 const BINS: usize = 16;
 
@@ -150,6 +153,8 @@ struct Build<'a, T> {
     boxes: &'a [Aabb<T>],
     centres: Vec<[T; 3]>,
     max_leaf: usize,
+    /// Bounds and centre bounds of the two sides of the last SAH split.
+    children: core::cell::RefCell<Option<[(Aabb<T>, Aabb<T>); 2]>>,
 }
 
 /// A binary node before collapsing to 4-ary.
@@ -193,33 +198,37 @@ impl<T: Real> Build<'_, T> {
     }
 
     /// Splits `order[range]` by the binned SAH; `None` to make a leaf.
-    fn split(&self, order: &mut [u32]) -> Option<usize> {
+    fn split(&self, order: &mut [u32], cb: &Aabb<T>) -> Option<usize> {
         let n = order.len();
         if n <= 1 {
             return None;
         }
-        let mut cb = Aabb::<T>::EMPTY;
+        let mut best: Option<(T, usize, usize)> = None; // cost, axis, bin
+        // One pass over the primitives bins all three axes.
+        let scale: [T; 3] = core::array::from_fn(|axis| {
+            let extent = cb.hi[axis] - cb.lo[axis];
+            if extent > T::ZERO {
+                T::from_i32(BINS as i32) / extent
+            } else {
+                T::ZERO
+            }
+        });
+        let mut bins = [[(Aabb::<T>::EMPTY, 0usize); BINS]; 3];
         for &p in order.iter() {
             let c = self.centres[p as usize];
-            cb.grow_point(T::Vec3::new(c[0], c[1], c[2]));
+            let b = &self.boxes[p as usize];
+            for axis in 0..3 {
+                let k = (((c[axis] - cb.lo[axis]) * scale[axis]).to_f64() as usize).min(BINS - 1);
+                let bin = &mut bins[axis][k];
+                bin.0 = bin.0.union(b);
+                bin.1 += 1;
+            }
         }
-        let mut best: Option<(T, usize, usize)> = None; // cost, axis, bin
         for axis in 0..3 {
-            let extent = cb.hi[axis] - cb.lo[axis];
-            if !(extent > T::ZERO) {
+            if scale[axis] == T::ZERO {
                 continue;
             }
-            let scale = T::from_i32(BINS as i32) / extent;
-            let bin_of = |p: u32| -> usize {
-                let b = ((self.centres[p as usize][axis] - cb.lo[axis]) * scale).to_f64();
-                (b as usize).min(BINS - 1)
-            };
-            let mut bins = [(Aabb::<T>::EMPTY, 0usize); BINS];
-            for &p in order.iter() {
-                let b = &mut bins[bin_of(p)];
-                b.0 = b.0.union(&self.boxes[p as usize]);
-                b.1 += 1;
-            }
+            let bins = &bins[axis];
             let mut right = [T::ZERO; BINS];
             let (mut acc, mut cnt) = (Aabb::<T>::EMPTY, 0);
             for i in (1..BINS).rev() {
@@ -253,17 +262,29 @@ impl<T: Real> Build<'_, T> {
                 return None;
             }
         }
-        let extent = cb.hi[axis] - cb.lo[axis];
-        let scale = T::from_i32(BINS as i32) / extent;
-        let lo = cb.lo[axis];
+        let (scale, lo) = (scale[axis], cb.lo[axis]);
         let mut left = 0;
+        // The children's bounds and centre bounds, gathered while partitioning (saves each
+        // child a pass over its primitives).
+        let mut sides = [(Aabb::<T>::EMPTY, Aabb::<T>::EMPTY); 2];
         for i in 0..n {
-            let b = ((self.centres[order[i] as usize][axis] - lo) * scale).to_f64();
-            if (b as usize).min(BINS - 1) <= bin {
+            let p = order[i] as usize;
+            let c = self.centres[p];
+            let b = ((c[axis] - lo) * scale).to_f64();
+            let side = if (b as usize).min(BINS - 1) <= bin {
                 order.swap(i, left);
                 left += 1;
+                &mut sides[0]
+            } else {
+                &mut sides[1]
+            };
+            side.0 = side.0.union(&self.boxes[p]);
+            for k in 0..3 {
+                side.1.lo[k] = side.1.lo[k].min(c[k]);
+                side.1.hi[k] = side.1.hi[k].max(c[k]);
             }
         }
+        *self.children.borrow_mut() = Some(sides);
         (left > 0 && left < n).then_some(left)
     }
 }
@@ -286,13 +307,22 @@ impl<T: Real> Bvh4<T> {
             boxes,
             centres,
             max_leaf,
+            children: core::cell::RefCell::new(None),
         };
         // Binary tree first (explicit stack), then collapse.
         let mut binary: Vec<Binary<T>> = Vec::new();
-        let bounds_of = |order: &[u32]| {
-            order
-                .iter()
-                .fold(Aabb::<T>::EMPTY, |a, &p| a.union(&boxes[p as usize]))
+        // Bounds of the primitives and of their centres, in one pass.
+        let bounds_of = |order: &[u32], centres: &[[T; 3]]| {
+            let (mut b, mut cb) = (Aabb::<T>::EMPTY, Aabb::<T>::EMPTY);
+            for &p in order {
+                b = b.union(&boxes[p as usize]);
+                let c = centres[p as usize];
+                for i in 0..3 {
+                    cb.lo[i] = cb.lo[i].min(c[i]);
+                    cb.hi[i] = cb.hi[i].max(c[i]);
+                }
+            }
+            (b, cb)
         };
         if order.is_empty() {
             return Self {
@@ -307,11 +337,15 @@ impl<T: Real> Bvh4<T> {
             first: 0,
             count: 0,
         });
-        let mut stack = alloc::vec![(0usize, order.len(), 0usize, 0usize)];
-        while let Some((start, end, slot, depth)) = stack.pop() {
-            let bounds = bounds_of(&order[start..end]);
-            let split = if depth < MEDIAN_AFTER_DEPTH {
-                build.split(&mut order[start..end])
+        let mut stack = alloc::vec![(0usize, order.len(), 0usize, 0usize, None)];
+        while let Some((start, end, slot, depth, known)) = stack.pop() {
+            let (bounds, centre_bounds) =
+                known.unwrap_or_else(|| bounds_of(&order[start..end], &build.centres));
+            build.children.replace(None);
+            // Small nodes split at the median centre: binning them costs more than the
+            // SAH gains this close to the leaves.
+            let split = if depth < MEDIAN_AFTER_DEPTH && end - start > SMALL_NODE {
+                build.split(&mut order[start..end], &centre_bounds)
             } else {
                 build.median_split(&mut order[start..end])
             };
@@ -336,8 +370,9 @@ impl<T: Real> Bvh4<T> {
                         bounds,
                         children: [l, r],
                     };
-                    stack.push((start, start + mid, l, depth + 1));
-                    stack.push((start + mid, end, r, depth + 1));
+                    let sides = build.children.take();
+                    stack.push((start, start + mid, l, depth + 1, sides.map(|s| s[0])));
+                    stack.push((start + mid, end, r, depth + 1, sides.map(|s| s[1])));
                 }
             }
         }

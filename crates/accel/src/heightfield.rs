@@ -237,12 +237,58 @@ impl HeightField {
             self.samples.iter().copied().min().unwrap_or(0),
             self.samples.iter().copied().max().unwrap_or(0),
         ];
-        for level in 2..=self.log2_side {
-            let n = self.side >> level;
-            self.pyramid.push(alloc::vec![[0, 0]; n * n]);
+        if self.log2_side < 2 {
+            return;
         }
-        let n = self.side as i64;
-        self.update_region(0, 0, n, n);
+        self.pyramid.push(self.level2_from_samples());
+        for level in 3..=self.log2_side {
+            let m = self.side >> level;
+            let below = &self.pyramid[level as usize - 3];
+            let mut nodes = Vec::with_capacity(m * m);
+            for y in 0..m {
+                for x in 0..m {
+                    let at = |cx: usize, cy: usize| below[(2 * y + cy) * 2 * m + 2 * x + cx];
+                    let (a, b, c, d) = (at(0, 0), at(1, 0), at(0, 1), at(1, 1));
+                    nodes.push([
+                        a[0].min(b[0]).min(c[0]).min(d[0]),
+                        a[1].max(b[1]).max(c[1]).max(d[1]),
+                    ]);
+                }
+            }
+            self.pyramid.push(nodes);
+        }
+    }
+
+    /// Level 2 (4 x 4 texels, 5 x 5 samples per node) in two separable passes: along rows,
+    /// then down the columns of row results. Only the last node of a row or column reads
+    /// past the tile (the wrapped corner).
+    fn level2_from_samples(&self) -> Vec<[u16; 2]> {
+        let n = self.side;
+        let m = n >> 2;
+        let wrapped = |i: usize| if i < n { i } else { self.wrap_index(i as i64) };
+        let mut rows = alloc::vec![[0u16, 0u16]; n * m];
+        for j in 0..n {
+            let row = &self.samples[j * n..(j + 1) * n];
+            for x in 0..m {
+                let mut b = [u16::MAX, 0];
+                for i in 4 * x..4 * x + 5 {
+                    let s = row[wrapped(i)];
+                    b = [b[0].min(s), b[1].max(s)];
+                }
+                rows[j * m + x] = b;
+            }
+        }
+        let mut nodes = alloc::vec![[u16::MAX, 0u16]; m * m];
+        for y in 0..m {
+            for j in 4 * y..4 * y + 5 {
+                let r = &rows[wrapped(j) * m..wrapped(j) * m + m];
+                let out = &mut nodes[y * m..(y + 1) * m];
+                for (o, c) in out.iter_mut().zip(r) {
+                    *o = [o[0].min(c[0]), o[1].max(c[1])];
+                }
+            }
+        }
+        nodes
     }
 
     /// Mutable access to the samples; call [`HeightField::update_region`] for the edited
@@ -366,6 +412,10 @@ mod tests {
             }
         }
         f.update_region(5, 10, 9, 14);
+        // Sample (0, 0) is also the far corner of the tile's last texels (Repeat).
+        f.samples_mut()[0] = 12345;
+        f.samples_mut()[1] = 65535;
+        f.update_region(0, 0, 2, 1);
         let mut g = f.clone();
         g.rebuild();
         assert_eq!(f.pyramid, g.pyramid);

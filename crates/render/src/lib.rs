@@ -5,7 +5,6 @@
 //! tracer ([`trace`]), the speed-against-error report ([`report`]) and the solver report
 //! ([`solvers`]).
 
-
 // `!(a > b)` is deliberate: it is true when either side is NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
