@@ -149,12 +149,15 @@ const SMALL_NODE: usize = 8;
 /// Bins of the SAH sweep.
 const BINS: usize = 16;
 
+/// Bounds and centre bounds of one side of a split.
+type Sides<T> = (Aabb<T>, Aabb<T>);
+
 struct Build<'a, T> {
     boxes: &'a [Aabb<T>],
     centres: Vec<[T; 3]>,
     max_leaf: usize,
     /// Bounds and centre bounds of the two sides of the last SAH split.
-    children: core::cell::RefCell<Option<[(Aabb<T>, Aabb<T>); 2]>>,
+    children: core::cell::RefCell<Option<[Sides<T>; 2]>>,
 }
 
 /// A binary node before collapsing to 4-ary.
@@ -279,10 +282,7 @@ impl<T: Real> Build<'_, T> {
                 &mut sides[1]
             };
             side.0 = side.0.union(&self.boxes[p]);
-            for k in 0..3 {
-                side.1.lo[k] = side.1.lo[k].min(c[k]);
-                side.1.hi[k] = side.1.hi[k].max(c[k]);
-            }
+            side.1.grow_point(T::Vec3::new(c[0], c[1], c[2]));
         }
         *self.children.borrow_mut() = Some(sides);
         (left > 0 && left < n).then_some(left)
@@ -317,10 +317,7 @@ impl<T: Real> Bvh4<T> {
             for &p in order {
                 b = b.union(&boxes[p as usize]);
                 let c = centres[p as usize];
-                for i in 0..3 {
-                    cb.lo[i] = cb.lo[i].min(c[i]);
-                    cb.hi[i] = cb.hi[i].max(c[i]);
-                }
+                cb.grow_point(T::Vec3::new(c[0], c[1], c[2]));
             }
             (b, cb)
         };
