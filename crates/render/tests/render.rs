@@ -1,0 +1,129 @@
+//! The renderer and the report on reduced scenes: methods agree where they must, and the
+//! CLI fails cleanly.
+
+use nlrt_render::report::compare;
+use nlrt_render::scenes;
+use nlrt_render::tessellate::Tessellated;
+use nlrt_render::trace::{Nonlinear, RenderOptions, render};
+use std::process::Command;
+
+fn small() -> RenderOptions {
+    RenderOptions {
+        width: 48,
+        height: 36,
+        spp: 1,
+        bounces: 1,
+    }
+}
+
+/// The mountain's base is flat with one normal, so every prism is an affine map and the
+/// nonlinear surface is exactly the pre-tessellated one: f64 depths agree to rounding
+/// (distances ~3, relative error of a few ulps amplified by the conditioning of a grazing
+/// hit; 1e-9 leaves room for that and would catch any real difference, which is >= 1e-4).
+#[test]
+fn nonlinear_equals_tessellation_where_the_map_is_affine() {
+    let scene = scenes::mountain(64);
+    let reference = render(&scene, &Tessellated::new(&scene), &small(), &|_| {});
+    let nl64 = render(&scene, &Nonlinear::<f64>::new(&scene), &small(), &|_| {});
+    let e = compare(&nl64, &reference);
+    assert!(e.pixels == 48 * 36 && reference.depth.iter().filter(|d| !d.is_nan()).count() > 200);
+    assert_eq!(e.mismatches, 0, "{e:?}");
+    assert!(e.depth_max < 1e-9, "{e:?}");
+    // f32 on the same scene: the same pixels hit; depths within f32 rounding amplified as
+    // above (2^-24 ~ 6e-8, times conditioning; 1e-4 is the finest detail's relative size).
+    let nl32 = render(&scene, &Nonlinear::<f32>::new(&scene), &small(), &|_| {});
+    let e32 = compare(&nl32, &nl64);
+    assert!(
+        e32.mismatch_rate() < 0.01 && e32.depth_p99 < 1e-4,
+        "{e32:?}"
+    );
+}
+
+/// On curved bases (cylinder, fur torus) the two surfaces differ by design; they still agree
+/// on nearly every pixel.
+#[test]
+fn curved_scenes_agree_with_the_reference_on_most_pixels() {
+    for scene in [scenes::cylinder(64), scenes::fur(32)] {
+        let reference = render(&scene, &Tessellated::new(&scene), &small(), &|_| {});
+        let nl = render(&scene, &Nonlinear::<f64>::new(&scene), &small(), &|_| {});
+        let e = compare(&nl, &reference);
+        assert!(e.mismatch_rate() < 0.02, "{}: {e:?}", scene.name);
+        assert!(e.depth_median < 1e-2, "{}: {e:?}", scene.name);
+        assert!(
+            nl.all_rays > nl.primary_rays,
+            "secondary rays are cast and counted"
+        );
+    }
+}
+
+fn nlrt(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_nlrt"))
+        .args(args)
+        .output()
+        .expect("nlrt runs")
+}
+
+#[test]
+fn unknown_scene_is_a_clear_error_with_exit_code_2() {
+    let out = nlrt(&["render", "teapot", "-o", "/dev/null"]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("unknown scene 'teapot'") && err.contains("mountain"),
+        "{err}"
+    );
+    let out = nlrt(&["bench", "mountain", "teapot"]);
+    assert_eq!(out.status.code(), Some(2));
+}
+
+#[test]
+fn absurd_parameters_are_rejected_with_exit_code_2() {
+    for args in [
+        &["render", "fur", "--size", "0x10"][..],
+        &["render", "fur", "--size", "64"][..],
+        &["render", "fur", "--spp", "0"][..],
+        &["render", "fur", "--bounces", "1000"][..],
+        &["solvers", "--samples", "0"][..],
+    ] {
+        let out = nlrt(args);
+        assert_eq!(out.status.code(), Some(2), "{args:?}");
+        assert!(!out.stderr.is_empty(), "{args:?}");
+    }
+}
+
+#[test]
+fn unwritable_output_is_an_error_not_a_panic() {
+    let out = nlrt(&[
+        "render",
+        "fur",
+        "--size",
+        "8x6",
+        "-o",
+        "/nonexistent-dir/x.png",
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("cannot write"));
+}
+
+#[test]
+fn render_writes_a_png() {
+    let dir = std::env::temp_dir().join(format!("nlrt-test-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("fur.png");
+    let out = nlrt(&[
+        "render",
+        "fur",
+        "--size",
+        "16x12",
+        "-o",
+        path.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let bytes = std::fs::read(&path).unwrap();
+    assert_eq!(&bytes[1..4], b"PNG");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
