@@ -527,8 +527,13 @@ impl<T: Real> DisplacedSurface<T> {
 
 /// The smallest level at which texels `floor(lo)..=floor(hi)` span at most 2 nodes per axis.
 fn root_nodes(lo: [f64; 2], hi: [f64; 2]) -> RootNodes {
-    let t0 = [lo[0].floor() as i32, lo[1].floor() as i32];
-    let t1 = [hi[0].floor() as i32, hi[1].floor() as i32];
+    // floor for |x| < MAX_TEXEL_COORDINATE (checked by the caller), without std or libm.
+    let floor = |x: f64| {
+        let t = x as i32;
+        if f64::from(t) > x { t - 1 } else { t }
+    };
+    let t0 = [floor(lo[0]), floor(lo[1])];
+    let t1 = [floor(hi[0]), floor(hi[1])];
     let mut level = 0;
     while ((t1[0] >> level) - (t0[0] >> level)) > 1 || ((t1[1] >> level) - (t0[1] >> level)) > 1 {
         level += 1;
