@@ -158,3 +158,24 @@ pub fn ray_from_above(rng: &mut SplitMix64, min_elevation: f64) -> ([f64; 3], [f
         dir,
     )
 }
+
+/// `n` random triangles in the unit tile; every fourth one has a vertex on a tile edge
+/// (u or v exactly 0 or 1), where neighbouring tiles meet.
+pub fn random_object<T: Real>(n: usize, seed: u64) -> Vec<[T::Vec3; 3]> {
+    let mut rng = SplitMix64::new(seed);
+    (0..n)
+        .map(|i| {
+            let centre = [rng.unit(), rng.unit(), 0.2 + 0.6 * rng.unit()];
+            let mut tri = [[0.0f64; 3]; 3];
+            for v in &mut tri {
+                for (c, x) in v.iter_mut().enumerate() {
+                    *x = (centre[c] + 0.3 * (rng.unit() - 0.5)).clamp(0.0, 1.0);
+                }
+            }
+            if i % 4 == 0 {
+                tri[0][0] = if rng.unit() < 0.5 { 0.0 } else { 1.0 };
+            }
+            tri.map(|p| T::Vec3::new(T::from_f64(p[0]), T::from_f64(p[1]), T::from_f64(p[2])))
+        })
+        .collect()
+}

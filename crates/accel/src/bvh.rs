@@ -391,6 +391,25 @@ impl<T: Real> Bvh4<T> {
         self.order.len()
     }
 
+    /// The nodes; node 0 is the root (for traversals with other ray kinds, e.g. nonlinear
+    /// rays in texture space).
+    #[must_use]
+    pub fn nodes(&self) -> &[Node4<T>] {
+        &self.nodes
+    }
+
+    /// Primitive indices in leaf order: a leaf child names `count` of them from `index`.
+    #[must_use]
+    pub fn primitive_order(&self) -> &[u32] {
+        &self.order
+    }
+
+    /// Whether `slot` of `node` is used.
+    #[must_use]
+    pub fn is_used(node: &Node4<T>, slot: usize) -> bool {
+        node.index[slot] != EMPTY_CHILD
+    }
+
     /// Inner nodes.
     #[must_use]
     pub fn node_count(&self) -> usize {

@@ -526,7 +526,7 @@ impl<T: Real> DisplacedSurface<T> {
 }
 
 /// The smallest level at which texels `floor(lo)..=floor(hi)` span at most 2 nodes per axis.
-fn root_nodes(lo: [f64; 2], hi: [f64; 2]) -> RootNodes {
+pub(crate) fn root_nodes(lo: [f64; 2], hi: [f64; 2]) -> RootNodes {
     // floor for |x| < MAX_TEXEL_COORDINATE (checked by the caller), without std or libm.
     let floor = |x: f64| {
         let t = x as i32;
@@ -554,7 +554,7 @@ fn root_nodes(lo: [f64; 2], hi: [f64; 2]) -> RootNodes {
 /// of the projections (`gamma(5)` times the sum of the magnitudes of their terms), so a square
 /// touching the triangle within rounding is kept. Degenerate triangles (a line or a point in
 /// uv) keep every square that the texel range allows along their degenerate direction.
-fn square_meets_triangle<T: Real>(lo: [T; 2], hi: [T; 2], tri: &[[T; 2]; 3]) -> bool {
+pub(crate) fn square_meets_triangle<T: Real>(lo: [T; 2], hi: [T; 2], tri: &[[T; 2]; 3]) -> bool {
     let five_u = T::from_i32(5) * T::UNIT_ROUNDOFF;
     let gamma5 = five_u / (T::ONE - five_u);
     for i in 0..3 {

@@ -9,6 +9,8 @@
 //!   from the samples, the rest stored), partial updates after edits.
 //! - [`DisplacedSurface`]: TLAS + the pyramid traversed by nonlinear rays (root selection,
 //!   texel discard, nearest-first order, range reduction, flat-texel shortcut).
+//! - [`ShellSurface`]: an object in texture space ([`ShellObject`], with its own BVH)
+//!   tiled over the base mesh: TLAS + implicit quadtree over tiles + the object's BVH.
 //!
 //! ```
 //! use nlrt_accel::{BaseMesh, DisplacedSurface, HeightField, TraversalStats, Wrap};
@@ -39,6 +41,7 @@ mod bvh;
 mod displacement;
 mod heightfield;
 mod mesh;
+mod shell;
 
 pub use bvh::{ARITY, Aabb, Bvh4, Node4, SlabRay};
 pub use displacement::{
@@ -47,3 +50,4 @@ pub use displacement::{
 };
 pub use heightfield::{HEIGHT_ONE, HeightField, HeightMapError, Wrap};
 pub use mesh::{BaseMesh, MeshError, prism_bounds};
+pub use shell::{ShellError, ShellHit, ShellObject, ShellSurface};

@@ -1,0 +1,542 @@
+//! Shell mapping of an instanced object: the object, given in texture space (one unit tile,
+//! `(u, v, h)` in `[0, 1]^3`), repeats over the base mesh's uv plane; an implicit quadtree
+//! over the tiles (no memory) leads to the object's texture-space BVH, whose triangles are
+//! texture-space planes intersected by the nonlinear ray like microtriangles (Ogaki 2023,
+//! sec. 5.2).
+
+use alloc::vec::Vec;
+use core::fmt;
+use nlrt_poly::{Real, Vector2, Vector3};
+use nlrt_shellmap::{
+    Hit, NonlinearRay, Prism, Ray, TexturePlane, intersect_box, intersect_microtriangle,
+    intersect_prism, world_normal,
+};
+
+use crate::bvh::{Aabb, Bvh4, SlabRay};
+use crate::displacement::{
+    MAX_TEXEL_COORDINATE, RootNodes, TraversalStats, root_nodes, square_meets_triangle,
+};
+use crate::mesh::{BaseMesh, prism_bounds};
+
+/// Why a shell object or surface was rejected.
+#[derive(Clone, Debug, PartialEq)]
+pub enum ShellError {
+    /// A coordinate of object triangle `triangle` is NaN, infinite or outside `[0, 1]`.
+    OutsideUnitTile {
+        /// The triangle.
+        triangle: usize,
+    },
+    /// The object has no triangle of non-zero area.
+    EmptyObject,
+    /// The height scale is not finite.
+    BadHeightScale(f64),
+    /// The tiling is not finite and positive.
+    BadTiling(f64),
+    /// A base triangle's uvs times the tiling reach beyond [`MAX_TEXEL_COORDINATE`] tiles.
+    UvOutOfRange {
+        /// The base triangle.
+        triangle: usize,
+    },
+}
+
+impl fmt::Display for ShellError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::OutsideUnitTile { triangle } => write!(
+                f,
+                "object triangle {triangle} has a coordinate outside [0, 1] (or NaN): objects live in one unit tile"
+            ),
+            Self::EmptyObject => write!(f, "the object has no triangle of non-zero area"),
+            Self::BadHeightScale(s) => write!(f, "height scale {s} is not a finite number"),
+            Self::BadTiling(k) => write!(f, "tiling {k} is not a finite number > 0"),
+            Self::UvOutOfRange { triangle } => write!(
+                f,
+                "base triangle {triangle}: uvs times tiling reach beyond {MAX_TEXEL_COORDINATE} tiles"
+            ),
+        }
+    }
+}
+
+/// An object in texture space with its BVH.
+#[derive(Clone, Debug)]
+pub struct ShellObject<T: Real> {
+    triangles: Vec<[T::Vec3; 3]>,
+    bvh: Bvh4<T>,
+    h_range: [T; 2],
+    /// Triangles dropped because their three points are collinear (no plane).
+    pub dropped_degenerate: usize,
+}
+
+impl<T: Real> ShellObject<T> {
+    /// An object from triangles with vertices `(u, v, h)` in `[0, 1]^3`; collinear triangles
+    /// (no area, so nothing to hit) are dropped and counted.
+    ///
+    /// # Errors
+    /// A coordinate outside `[0, 1]` or not finite; no triangle left.
+    pub fn new(triangles: Vec<[T::Vec3; 3]>) -> Result<Self, ShellError> {
+        let mut kept = Vec::with_capacity(triangles.len());
+        let mut dropped = 0;
+        for (i, t) in triangles.iter().enumerate() {
+            let ok = t.iter().all(|p| {
+                [p.x(), p.y(), p.z()]
+                    .iter()
+                    .all(|&c| c >= T::ZERO && c <= T::ONE)
+            });
+            if !ok {
+                return Err(ShellError::OutsideUnitTile { triangle: i });
+            }
+            if TexturePlane::<T>::through(t).is_some() {
+                kept.push(*t);
+            } else {
+                dropped += 1;
+            }
+        }
+        if kept.is_empty() {
+            return Err(ShellError::EmptyObject);
+        }
+        let boxes: Vec<Aabb<T>> = kept
+            .iter()
+            .map(|t| Aabb::of_points(t.iter().copied()))
+            .collect();
+        let bvh = Bvh4::build(&boxes, 4);
+        let b = bvh.bounds();
+        Ok(Self {
+            triangles: kept,
+            bvh,
+            h_range: [b.lo[2], b.hi[2]],
+            dropped_degenerate: dropped,
+        })
+    }
+
+    /// Triangles kept.
+    #[must_use]
+    pub fn triangles(&self) -> &[[T::Vec3; 3]] {
+        &self.triangles
+    }
+
+    /// Bytes of triangles and BVH (stored once, whatever the number of tiles).
+    #[must_use]
+    pub fn memory_bytes(&self) -> usize {
+        self.triangles.len() * core::mem::size_of::<[T::Vec3; 3]>() + self.bvh.memory_bytes()
+    }
+}
+
+/// A hit on a shell-mapped object.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ShellHit<T: Real> {
+    /// The hit in the prism's coordinates.
+    pub hit: Hit<T>,
+    /// Base triangle.
+    pub triangle: u32,
+    /// Tile.
+    pub tile: [i32; 2],
+    /// Object triangle (index into [`ShellObject::triangles`]).
+    pub object_triangle: u32,
+}
+
+/// A base mesh whose shell holds an object tiled `tiling x tiling` times per unit of uv.
+#[derive(Clone, Debug)]
+pub struct ShellSurface<T: Real> {
+    mesh: BaseMesh<T>,
+    object: ShellObject<T>,
+    height_scale: T,
+    tiling: T,
+    roots: Vec<RootNodes>,
+    tlas: Bvh4<T>,
+}
+
+#[derive(Clone, Copy)]
+struct Pending<T> {
+    level: u32,
+    x: i32,
+    y: i32,
+    t_in: T,
+}
+
+/// Quadtree stack: 3 more entries per level at most, levels below 32.
+const QUAD_STACK: usize = 3 * 32 + 4;
+/// Object-BVH stack (the BVH's depth is bounded by its builder: below 72).
+const OBJECT_STACK: usize = 3 * 72 + 4;
+
+impl<T: Real> ShellSurface<T> {
+    /// Builds the surface: per base triangle its root tiles, and the TLAS.
+    ///
+    /// # Errors
+    /// Bad height scale or tiling, or uvs too large.
+    pub fn new(
+        mesh: BaseMesh<T>,
+        object: ShellObject<T>,
+        height_scale: T,
+        tiling: T,
+    ) -> Result<Self, ShellError> {
+        if !height_scale.is_finite() {
+            return Err(ShellError::BadHeightScale(height_scale.to_f64()));
+        }
+        if !(tiling > T::ZERO && tiling.is_finite()) {
+            return Err(ShellError::BadTiling(tiling.to_f64()));
+        }
+        let mut roots = Vec::with_capacity(mesh.triangle_count());
+        let mut boxes = Vec::with_capacity(mesh.triangle_count());
+        for i in 0..mesh.triangle_count() {
+            let prism = mesh.prism(i, height_scale, tiling);
+            boxes.push(prism_bounds(&prism));
+            let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+            for uv in prism.uv {
+                for (a, c) in [uv.x(), uv.y()].into_iter().enumerate() {
+                    lo[a] = lo[a].min(c.to_f64());
+                    hi[a] = hi[a].max(c.to_f64());
+                }
+            }
+            if !(lo[0]
+                .abs()
+                .max(lo[1].abs())
+                .max(hi[0].abs())
+                .max(hi[1].abs())
+                < MAX_TEXEL_COORDINATE)
+            {
+                return Err(ShellError::UvOutOfRange { triangle: i });
+            }
+            roots.push(root_nodes(lo, hi));
+        }
+        let tlas = Bvh4::build(&boxes, 1);
+        Ok(Self {
+            mesh,
+            object,
+            height_scale,
+            tiling,
+            roots,
+            tlas,
+        })
+    }
+
+    /// The object.
+    #[must_use]
+    pub fn object(&self) -> &ShellObject<T> {
+        &self.object
+    }
+
+    /// The base mesh.
+    #[must_use]
+    pub fn mesh(&self) -> &BaseMesh<T> {
+        &self.mesh
+    }
+
+    /// The prism of base triangle `i`.
+    #[must_use]
+    pub fn prism(&self, i: usize) -> Prism<T> {
+        self.mesh.prism(i, self.height_scale, self.tiling)
+    }
+
+    /// Bytes of acceleration data: object and its BVH (once), TLAS, roots. The quadtree
+    /// costs nothing.
+    #[must_use]
+    pub fn memory_bytes(&self) -> usize {
+        self.object.memory_bytes()
+            + self.tlas.memory_bytes()
+            + self.roots.len() * core::mem::size_of::<RootNodes>()
+    }
+
+    #[inline]
+    fn shifted(tri: &[T::Vec3; 3], x: i32, y: i32) -> [T::Vec3; 3] {
+        let d = T::Vec3::new(T::from_i32(x), T::from_i32(y), T::ZERO);
+        [tri[0] + d, tri[1] + d, tri[2] + d]
+    }
+
+    /// Nearest hit on object triangle `k` placed in tile `(x, y)`.
+    #[inline]
+    fn intersect_object_triangle(
+        &self,
+        prism: &Prism<T>,
+        ray: &NonlinearRay<T>,
+        k: u32,
+        x: i32,
+        y: i32,
+        t_min: T,
+        t_max: T,
+    ) -> Option<Hit<T>> {
+        let tri = Self::shifted(&self.object.triangles[k as usize], x, y);
+        let lo = tri[0].z().min(tri[1].z()).min(tri[2].z());
+        let hi = tri[0].z().max(tri[1].z()).max(tri[2].z());
+        intersect_microtriangle(prism, ray, &tri, lo, hi, t_min, t_max)
+    }
+
+    /// The object's BVH in tile `(x, y)`, nearest first; updates `best`.
+    #[allow(clippy::too_many_arguments)]
+    fn intersect_tile(
+        &self,
+        tri: usize,
+        prism: &Prism<T>,
+        ray: &NonlinearRay<T>,
+        x: i32,
+        y: i32,
+        t_min: T,
+        t_max: &mut T,
+        best: &mut Option<ShellHit<T>>,
+        stats: &mut TraversalStats,
+    ) {
+        let nodes = self.object.bvh.nodes();
+        let order = self.object.bvh.primitive_order();
+        if nodes.is_empty() {
+            return;
+        }
+        let (dx, dy) = (T::from_i32(x), T::from_i32(y));
+        let mut stack = [(0u32, T::ZERO); OBJECT_STACK];
+        let mut depth = 1;
+        stack[0] = (0, t_min);
+        while depth > 0 {
+            depth -= 1;
+            let (node, entry) = stack[depth];
+            if entry > *t_max {
+                continue;
+            }
+            let node = &nodes[node as usize];
+            let mut found: [(T, usize); 4] = [(T::ZERO, 0); 4];
+            let mut n = 0;
+            for c in 0..4 {
+                if !Bvh4::is_used(node, c) {
+                    continue;
+                }
+                let b = &node.bounds[c];
+                stats.box_tests += 1;
+                let lo = [b.lo[0] + dx, b.lo[1] + dy, b.lo[2]];
+                let hi = [b.hi[0] + dx, b.hi[1] + dy, b.hi[2]];
+                if let Some(span) = intersect_box(prism, ray, lo, hi, t_min, *t_max) {
+                    let mut i = n;
+                    while i > 0 && found[i - 1].0 > span.t_in {
+                        found[i] = found[i - 1];
+                        i -= 1;
+                    }
+                    found[i] = (span.t_in, c);
+                    n += 1;
+                }
+            }
+            for &(t, c) in found[..n].iter() {
+                if node.count[c] > 0 && t <= *t_max {
+                    let first = node.index[c] as usize;
+                    for &k in &order[first..first + node.count[c] as usize] {
+                        stats.texel_tests += 1;
+                        if let Some(hit) =
+                            self.intersect_object_triangle(prism, ray, k, x, y, t_min, *t_max)
+                        {
+                            *t_max = hit.t;
+                            *best = Some(ShellHit {
+                                hit,
+                                triangle: tri as u32,
+                                tile: [x, y],
+                                object_triangle: k,
+                            });
+                        }
+                    }
+                }
+            }
+            for &(t, c) in found[..n].iter().rev() {
+                if node.count[c] == 0 {
+                    stack[depth] = (node.index[c], t);
+                    depth += 1;
+                }
+            }
+        }
+    }
+
+    /// The nearest hit in base triangle `tri` through the implicit quadtree over tiles.
+    pub fn intersect_blas(
+        &self,
+        tri: usize,
+        prism: &Prism<T>,
+        ray: &NonlinearRay<T>,
+        t_min: T,
+        t_max: T,
+        stats: &mut TraversalStats,
+    ) -> Option<ShellHit<T>> {
+        let root = self.roots[tri];
+        let uv_tri = prism.uv.map(|t| [t.x(), t.y()]);
+        let [h_lo, h_hi] = self.object.h_range;
+        let mut stack = [Pending {
+            level: 0,
+            x: 0,
+            y: 0,
+            t_in: T::ZERO,
+        }; QUAD_STACK];
+        let mut depth = 0;
+        let mut best = None;
+        let mut t_max = t_max;
+        let push = |level: u32,
+                    nodes: &mut dyn Iterator<Item = (i32, i32)>,
+                    t_max: T,
+                    stack: &mut [Pending<T>; QUAD_STACK],
+                    depth: &mut usize,
+                    stats: &mut TraversalStats| {
+            let mut found = [Pending {
+                level,
+                x: 0,
+                y: 0,
+                t_in: T::ZERO,
+            }; 4];
+            let mut n = 0;
+            for (x, y) in nodes {
+                let k = 1i64 << level;
+                let (tx0, ty0) = (i64::from(x) * k, i64::from(y) * k);
+                let [r0, r1, r2, r3] = root.texels;
+                if tx0 > i64::from(r2)
+                    || ty0 > i64::from(r3)
+                    || tx0 + k <= i64::from(r0)
+                    || ty0 + k <= i64::from(r1)
+                {
+                    continue;
+                }
+                let lo = [T::from_f64(tx0 as f64), T::from_f64(ty0 as f64)];
+                let hi = [T::from_f64((tx0 + k) as f64), T::from_f64((ty0 + k) as f64)];
+                if !square_meets_triangle(lo, hi, &uv_tri) {
+                    continue;
+                }
+                stats.box_tests += 1;
+                if let Some(span) = intersect_box(
+                    prism,
+                    ray,
+                    [lo[0], lo[1], h_lo],
+                    [hi[0], hi[1], h_hi],
+                    t_min,
+                    t_max,
+                ) {
+                    let mut i = n;
+                    while i > 0 && found[i - 1].t_in > span.t_in {
+                        found[i] = found[i - 1];
+                        i -= 1;
+                    }
+                    found[i] = Pending {
+                        level,
+                        x,
+                        y,
+                        t_in: span.t_in,
+                    };
+                    n += 1;
+                }
+            }
+            for p in found[..n].iter().rev() {
+                stack[*depth] = *p;
+                *depth += 1;
+            }
+        };
+        let mut roots = (0..i32::from(root.ny))
+            .flat_map(|j| (0..i32::from(root.nx)).map(move |i| (root.x + i, root.y + j)));
+        push(root.level, &mut roots, t_max, &mut stack, &mut depth, stats);
+        while depth > 0 {
+            depth -= 1;
+            let node = stack[depth];
+            if node.t_in > t_max {
+                continue;
+            }
+            if node.level == 0 {
+                self.intersect_tile(
+                    tri, prism, ray, node.x, node.y, t_min, &mut t_max, &mut best, stats,
+                );
+                continue;
+            }
+            let (x, y) = (node.x * 2, node.y * 2);
+            let mut children = [(x, y), (x + 1, y), (x, y + 1), (x + 1, y + 1)].into_iter();
+            push(
+                node.level - 1,
+                &mut children,
+                t_max,
+                &mut stack,
+                &mut depth,
+                stats,
+            );
+        }
+        best
+    }
+
+    /// Every object triangle in every tile of the triangle's uv box (the test reference).
+    pub fn intersect_blas_brute_force(
+        &self,
+        tri: usize,
+        prism: &Prism<T>,
+        ray: &NonlinearRay<T>,
+        t_min: T,
+        t_max: T,
+    ) -> Option<ShellHit<T>> {
+        let [x0, y0, x1, y1] = self.roots[tri].texels;
+        let mut best = None;
+        let mut t_max = t_max;
+        for y in y0..=y1 {
+            for x in x0..=x1 {
+                for k in 0..self.object.triangles.len() as u32 {
+                    if let Some(hit) =
+                        self.intersect_object_triangle(prism, ray, k, x, y, t_min, t_max)
+                    {
+                        t_max = hit.t;
+                        best = Some(ShellHit {
+                            hit,
+                            triangle: tri as u32,
+                            tile: [x, y],
+                            object_triangle: k,
+                        });
+                    }
+                }
+            }
+        }
+        best
+    }
+
+    /// The nearest hit: TLAS, prism gate, quadtree, object BVH.
+    pub fn intersect(
+        &self,
+        ray: &Ray<T>,
+        t_min: T,
+        t_max: T,
+        stats: &mut TraversalStats,
+    ) -> Option<ShellHit<T>> {
+        let slab = SlabRay::new(ray.origin, ray.dir);
+        let mut best = None;
+        self.tlas.traverse(&slab, t_min, t_max, |tri, t_max| {
+            let prism = self.prism(tri as usize);
+            stats.prism_tests += 1;
+            intersect_prism(&prism, ray, t_min, t_max)?;
+            let nl = NonlinearRay::new(&prism, ray);
+            let hit = self.intersect_blas(tri as usize, &prism, &nl, t_min, t_max, stats)?;
+            best = Some(hit);
+            Some(hit.hit.t)
+        });
+        best
+    }
+
+    /// The nearest hit by brute force over every base triangle, tile and object triangle.
+    pub fn intersect_brute_force(&self, ray: &Ray<T>, t_min: T, t_max: T) -> Option<ShellHit<T>> {
+        let mut best: Option<ShellHit<T>> = None;
+        let mut t_max = t_max;
+        for tri in 0..self.mesh.triangle_count() {
+            let prism = self.prism(tri);
+            let nl = NonlinearRay::new(&prism, ray);
+            if let Some(hit) = self.intersect_blas_brute_force(tri, &prism, &nl, t_min, t_max) {
+                t_max = hit.hit.t;
+                best = Some(hit);
+            }
+        }
+        best
+    }
+
+    /// World-space unit normal at a hit (Eq. 13), facing against `dir`.
+    #[must_use]
+    pub fn normal(&self, hit: &ShellHit<T>, dir: T::Vec3) -> Option<T::Vec3> {
+        let prism = self.prism(hit.triangle as usize);
+        let tri = Self::shifted(
+            &self.object.triangles[hit.object_triangle as usize],
+            hit.tile[0],
+            hit.tile[1],
+        );
+        let plane = TexturePlane::through(&tri)?;
+        let n = world_normal(
+            &prism,
+            &plane.canonical(&prism),
+            hit.hit.alpha,
+            hit.hit.beta,
+            hit.hit.h,
+        );
+        let len = n.length();
+        if !(len > T::ZERO && len.is_finite()) {
+            return None;
+        }
+        let n = n * (T::ONE / len);
+        Some(if n.dot(dir) > T::ZERO { -n } else { n })
+    }
+}

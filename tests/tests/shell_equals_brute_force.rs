@@ -1,0 +1,93 @@
+//! Shell mapping: TLAS + implicit quadtree over tiles + the object's BVH returns the first hit
+//! that testing every object triangle in every tile of every base triangle returns.
+
+use nlrt_accel::{ShellObject, ShellSurface, TraversalStats};
+use nlrt_poly::{Real, Vector3};
+use nlrt_shellmap::Ray;
+use nlrt_tests::geometry::{SplitMix64, grid_mesh, random_object, ray_from_above};
+
+fn ray_count() -> usize {
+    if std::env::var_os("NLRT_EXTENSIVE").is_some() {
+        6000
+    } else {
+        300
+    }
+}
+
+fn compare<T: Real>(
+    tiling: f64,
+    mesh_n: usize,
+    degenerate: bool,
+    object_size: usize,
+    min_elevation: f64,
+) {
+    let seed = (tiling * 100.0) as u64 + mesh_n as u64;
+    let object = ShellObject::<T>::new(random_object::<T>(object_size, seed)).unwrap();
+    let surface = ShellSurface::new(
+        grid_mesh::<T>(mesh_n, 0.15, degenerate),
+        object,
+        T::from_f64(0.1),
+        T::from_f64(tiling),
+    )
+    .unwrap();
+    let mut rng = SplitMix64::new(seed ^ 0xabc);
+    // Same bound as the displacement test: ties between triangles sharing a point.
+    let t_bound = T::from_f64(3.0) * T::EPSILON.sqrt();
+    let (mut hits, mut mismatches, mut tests) = (0, 0, 0u64);
+    for _ in 0..ray_count() {
+        let (o, d) = ray_from_above(&mut rng, min_elevation);
+        let v = |a: [f64; 3]| T::Vec3::new(T::from_f64(a[0]), T::from_f64(a[1]), T::from_f64(a[2]));
+        let ray = Ray::new(v(o), v(d)).unwrap();
+        let mut stats = TraversalStats::default();
+        let fast = surface.intersect(&ray, T::ZERO, T::INFINITY, &mut stats);
+        tests += u64::from(stats.texel_tests);
+        let brute = surface.intersect_brute_force(&ray, T::ZERO, T::INFINITY);
+        let agree = match (fast, brute) {
+            (None, None) => true,
+            (Some(a), Some(b)) => {
+                hits += 1;
+                a == b || (a.hit.t - b.hit.t).abs() <= t_bound
+            }
+            _ => false,
+        };
+        if !agree {
+            mismatches += 1;
+            eprintln!(
+                "{}: mismatch {fast:?} vs {brute:?} for {o:?} {d:?}",
+                T::NAME
+            );
+        }
+    }
+    eprintln!(
+        "{} tiling {tiling} mesh {mesh_n} object {object_size}: {hits} hits of {} rays, {mismatches} mismatches, {tests} triangle tests",
+        T::NAME,
+        ray_count()
+    );
+    assert!(hits > ray_count() / 10, "the rays should often hit");
+    assert_eq!(mismatches, 0);
+}
+
+macro_rules! shell_tests {
+    ($($t:ident),*) => {$(
+        mod $t {
+            use super::*;
+
+            #[test]
+            fn tiled_4() {
+                compare::<$t>(4.0, 2, false, 40, 0.3);
+            }
+
+            #[test]
+            fn tiled_16_grazing() {
+                compare::<$t>(16.0, 2, false, 12, 0.05);
+            }
+
+            #[test]
+            fn uv_degenerate_base_triangles() {
+                compare::<$t>(3.0, 3, true, 30, 0.3);
+            }
+        }
+    )*};
+}
+
+shell_tests!(f32, f64);
