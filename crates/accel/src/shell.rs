@@ -249,8 +249,7 @@ impl<T: Real> ShellSurface<T> {
         prism: &Prism<T>,
         ray: &NonlinearRay<T>,
         k: u32,
-        x: i32,
-        y: i32,
+        [x, y]: [i32; 2],
         t_min: T,
         t_max: T,
     ) -> Option<Hit<T>> {
@@ -316,7 +315,7 @@ impl<T: Real> ShellSurface<T> {
                     for &k in &order[first..first + node.count[c] as usize] {
                         stats.texel_tests += 1;
                         if let Some(hit) =
-                            self.intersect_object_triangle(prism, ray, k, x, y, t_min, *t_max)
+                            self.intersect_object_triangle(prism, ray, k, [x, y], t_min, *t_max)
                         {
                             *t_max = hit.t;
                             *best = Some(ShellHit {
@@ -462,7 +461,7 @@ impl<T: Real> ShellSurface<T> {
             for x in x0..=x1 {
                 for k in 0..self.object.triangles.len() as u32 {
                     if let Some(hit) =
-                        self.intersect_object_triangle(prism, ray, k, x, y, t_min, t_max)
+                        self.intersect_object_triangle(prism, ray, k, [x, y], t_min, t_max)
                     {
                         t_max = hit.t;
                         best = Some(ShellHit {
