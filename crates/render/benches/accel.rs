@@ -32,9 +32,12 @@ fn camera_rays(scene: &Scene, n: usize) -> Vec<(DVec3, DVec3)> {
 }
 
 fn trace<T: Real>(c: &mut Criterion, scene: &Scene) {
+    let scenes::Content::Displacement(field) = &scene.content else {
+        unreachable!("displacement scenes only")
+    };
     let surface = DisplacedSurface::new(
         scene.mesh::<T>(),
-        scene.field.clone(),
+        field.clone(),
         T::from_f64(scene.height_scale),
         T::from_f64(scene.tiling),
     )

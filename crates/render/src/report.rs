@@ -227,9 +227,9 @@ pub fn run(opts: &ReportOptions) -> Result<String, String> {
             ));
         };
         eprintln!(
-            "scene {name}: {} base triangles, {}^2 map",
+            "scene {name}: {} base triangles, {}",
             scene.triangles.len(),
-            scene.field.side()
+            scene.content.describe()
         );
         let runs = run_scene(&scene, opts);
         let reference = runs.iter().find(|m| m.method == Method::Tessellated);

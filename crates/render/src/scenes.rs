@@ -20,16 +20,36 @@ pub struct Scene {
     pub uvs: Vec<DVec2>,
     /// Triangles.
     pub triangles: Vec<[u32; 3]>,
-    /// Height map.
-    pub field: HeightField,
-    /// World height of a sample of 1.
+    /// What fills the shell.
+    pub content: Content,
+    /// World height of `h = 1` (the shell's thickness along unit normals).
     pub height_scale: f64,
-    /// Height-map repeats per unit of uv.
+    /// Repeats of the height map or object per unit of uv.
     pub tiling: f64,
     /// Camera.
     pub camera: Camera,
     /// Direction towards the sun (unit).
     pub sun: DVec3,
+}
+
+/// What fills a scene's shell.
+#[derive(Clone, Debug)]
+pub enum Content {
+    /// A height map (displacement mapping).
+    Displacement(HeightField),
+    /// An object in one unit tile of texture space, `(u, v, h)` in `[0, 1]^3` (shell mapping).
+    Shell(Vec<[DVec3; 3]>),
+}
+
+impl Content {
+    /// A one-line description.
+    #[must_use]
+    pub fn describe(&self) -> String {
+        match self {
+            Content::Displacement(f) => format!("{}^2 height map", f.side()),
+            Content::Shell(t) => format!("instanced object of {} triangles", t.len()),
+        }
+    }
 }
 
 /// A pinhole camera.
@@ -62,8 +82,9 @@ impl Camera {
     }
 }
 
-/// Names of the built-in scenes.
-pub const SCENE_NAMES: [&str; 3] = ["mountain", "cylinder", "fur"];
+/// Names of the built-in scenes: displacement mapping (mountain, cylinder, fur) and shell
+/// mapping (scales, cornell).
+pub const SCENE_NAMES: [&str; 5] = ["mountain", "cylinder", "fur", "scales", "cornell"];
 
 /// Sizes of a built-in scene: the paper's, or reduced for quick runs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -82,6 +103,8 @@ pub fn builtin(name: &str, size: Size) -> Option<Scene> {
         "mountain" => Some(mountain(if big { 4096 } else { 1024 })),
         "cylinder" => Some(cylinder(if big { 4096 } else { 1024 })),
         "fur" => Some(fur(if big { 256 } else { 64 })),
+        "scales" => Some(scales()),
+        "cornell" => Some(cornell(if big { 15 } else { 6 })),
         _ => None,
     }
 }
@@ -195,7 +218,7 @@ pub fn mountain(side: usize) -> Scene {
         normals: vec![DVec3::Y; 4],
         uvs,
         triangles: vec![[0, 2, 1], [0, 3, 2]],
-        field: field(side, &fbm_map(side, 4, 8, 11)),
+        content: Content::Displacement(field(side, &fbm_map(side, 4, 8, 11))),
         height_scale: 0.3,
         tiling: 1.0,
         camera: Camera {
@@ -248,7 +271,7 @@ pub fn cylinder(side: usize) -> Scene {
         normals,
         uvs,
         triangles,
-        field: field(side, &fbm_map(side, 8, 9, 23)),
+        content: Content::Displacement(field(side, &fbm_map(side, 8, 9, 23))),
         height_scale: 0.12,
         tiling: 1.0,
         camera: Camera {
@@ -263,20 +286,17 @@ pub fn cylinder(side: usize) -> Scene {
 /// (c) Torus fur: 8,192 base triangles (64 x 64 quads), a spike map tiled 8 x 8.
 #[must_use]
 pub fn fur(side: usize) -> Scene {
-    let (r_major, r_minor) = (1.0, 0.35);
-    let (positions, normals, uvs, triangles) = grid(64, 64, |u, v| {
-        let (a, b) = (TAU * u, TAU * v);
-        let centre = DVec3::new(a.cos(), 0.0, a.sin()) * r_major;
-        let n = DVec3::new(a.cos() * b.cos(), b.sin(), a.sin() * b.cos());
-        (centre + n * r_minor, n)
-    });
+    let (positions, normals, uvs, triangles) = torus(64, 1.0, 0.35);
     Scene {
         name: "fur",
         positions,
         normals,
         uvs,
         triangles,
-        field: field(side, &spike_map(side, side / 8, side as f64 / 24.0, 5)),
+        content: Content::Displacement(field(
+            side,
+            &spike_map(side, side / 8, side as f64 / 24.0, 5),
+        )),
         height_scale: 0.12,
         tiling: 8.0,
         camera: Camera {
@@ -305,5 +325,136 @@ impl Scene {
             self.triangles.clone(),
         )
         .expect("built-in meshes are valid")
+    }
+}
+
+/// A torus of `n x n` quads: positions, unit normals, uvs, triangles.
+fn torus(
+    n: usize,
+    r_major: f64,
+    r_minor: f64,
+) -> (Vec<DVec3>, Vec<DVec3>, Vec<DVec2>, Vec<[u32; 3]>) {
+    grid(n, n, |u, v| {
+        let (a, b) = (TAU * u, TAU * v);
+        let centre = DVec3::new(a.cos(), 0.0, a.sin()) * r_major;
+        let n = DVec3::new(a.cos() * b.cos(), b.sin(), a.sin() * b.cos());
+        (centre + n * r_minor, n)
+    })
+}
+
+/// A `n x n` grid of the surface `f(s, t)` as triangles.
+fn patch(n: usize, f: impl Fn(f64, f64) -> DVec3) -> Vec<[DVec3; 3]> {
+    let mut out = Vec::new();
+    for j in 0..n {
+        for i in 0..n {
+            let p = |a: usize, b: usize| f(a as f64 / n as f64, b as f64 / n as f64);
+            out.push([p(i, j), p(i + 1, j), p(i + 1, j + 1)]);
+            out.push([p(i, j), p(i + 1, j + 1), p(i, j + 1)]);
+        }
+    }
+    out
+}
+
+/// A scale (shingle): a curved plate rising from the tile's lower edge to its upper edge
+/// and overlapping the next row, like fish or reptile scales (8 x 8 quads, 128 triangles).
+#[must_use]
+pub fn scale_object() -> Vec<[DVec3; 3]> {
+    patch(8, |s, t| {
+        let u = 0.04 + 0.92 * s;
+        let v = 0.02 + 0.96 * t;
+        let across = (std::f64::consts::PI * s).sin();
+        DVec3::new(u, v, (0.15 + 0.8 * t * across).min(1.0))
+    })
+}
+
+/// (e) Scales: a torus of 2,048 base triangles with a scale object tiled 16 x 16.
+#[must_use]
+pub fn scales() -> Scene {
+    let (positions, normals, uvs, triangles) = torus(32, 1.0, 0.4);
+    Scene {
+        name: "scales",
+        positions,
+        normals,
+        uvs,
+        triangles,
+        content: Content::Shell(scale_object()),
+        height_scale: 0.06,
+        tiling: 16.0,
+        camera: Camera {
+            eye: DVec3::new(0.0, 1.8, 2.2),
+            target: DVec3::new(0.0, -0.1, 0.0),
+            fov_degrees: 45.0,
+        },
+        sun: DVec3::new(0.3, 0.8, 0.5).normalize(),
+    }
+}
+
+/// A Cornell-box-like object in the unit tile: floor, back, left and right walls and two
+/// blocks, the walls `n x n` grids and the block faces `n/2 x n/2` (`n = 15`: 2,780 triangles).
+#[must_use]
+pub fn cornell_object(n: usize) -> Vec<[DVec3; 3]> {
+    let mut t = Vec::new();
+    let (lo, hi) = (0.05, 0.95);
+    let lerp = |a: f64, b: f64, s: f64| a + (b - a) * s;
+    // Floor (h = lo), back wall (v = hi), left (u = lo) and right (u = hi) walls.
+    t.extend(patch(n, |s, r| {
+        DVec3::new(lerp(lo, hi, s), lerp(lo, hi, r), lo)
+    }));
+    t.extend(patch(n, |s, r| {
+        DVec3::new(lerp(lo, hi, s), hi, lerp(lo, hi, r))
+    }));
+    t.extend(patch(n, |s, r| {
+        DVec3::new(lo, lerp(lo, hi, s), lerp(lo, hi, r))
+    }));
+    t.extend(patch(n, |s, r| {
+        DVec3::new(hi, lerp(lo, hi, s), lerp(lo, hi, r))
+    }));
+    // Two blocks: tops and four sides each (a tall and a short one).
+    for (x0, y0, w, height) in [(0.2, 0.5, 0.25, 0.7), (0.55, 0.2, 0.25, 0.35)] {
+        let (x1, y1, z1) = (x0 + w, y0 + w, lo + height);
+        let m = (n / 2).max(1);
+        t.extend(patch(m, |s, r| {
+            DVec3::new(lerp(x0, x1, s), lerp(y0, y1, r), z1)
+        }));
+        t.extend(patch(m, |s, r| {
+            DVec3::new(lerp(x0, x1, s), y0, lerp(lo, z1, r))
+        }));
+        t.extend(patch(m, |s, r| {
+            DVec3::new(lerp(x0, x1, s), y1, lerp(lo, z1, r))
+        }));
+        t.extend(patch(m, |s, r| {
+            DVec3::new(x0, lerp(y0, y1, s), lerp(lo, z1, r))
+        }));
+        t.extend(patch(m, |s, r| {
+            DVec3::new(x1, lerp(y0, y1, s), lerp(lo, z1, r))
+        }));
+    }
+    t
+}
+
+/// (g) Cornell: a UV sphere of 722 base triangles (19 x 19 quads; the rows at the poles are
+/// world-degenerate there) with a Cornell-box-like object tiled 16 x 16.
+#[must_use]
+pub fn cornell(n: usize) -> Scene {
+    let (positions, normals, uvs, triangles) = grid(19, 19, |u, v| {
+        let (a, b) = (TAU * u, std::f64::consts::PI * (v - 0.5));
+        let n = DVec3::new(a.cos() * b.cos(), b.sin(), a.sin() * b.cos());
+        (n, n)
+    });
+    Scene {
+        name: "cornell",
+        positions,
+        normals,
+        uvs,
+        triangles,
+        content: Content::Shell(cornell_object(n)),
+        height_scale: 0.1,
+        tiling: 16.0,
+        camera: Camera {
+            eye: DVec3::new(0.0, 0.9, 2.6),
+            target: DVec3::ZERO,
+            fov_degrees: 45.0,
+        },
+        sun: DVec3::new(0.4, 0.7, 0.6).normalize(),
     }
 }

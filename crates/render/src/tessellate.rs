@@ -1,10 +1,11 @@
-//! The pre-tessellated reference: every microtriangle clipped to its base triangle in uv,
+//! The pre-tessellated reference: every microtriangle (or instanced object triangle) clipped
+//! to its base triangle in uv,
 //! mapped to world space by Eq. 1 at its vertices, and put in a world-space BVH (the
 //! approach the paper compares against, Table 2). It is a different surface from the
 //! nonlinear one by design (flat world triangles instead of the curved images of flat
 //! microtriangles); the report states their distance.
 
-use crate::scenes::Scene;
+use crate::scenes::{Content, Scene};
 use nlrt_accel::{Aabb, Bvh4, HEIGHT_ONE, SlabRay};
 use nlrt_poly::glam::{DVec2, DVec3};
 use rayon::prelude::*;
@@ -42,8 +43,12 @@ impl Tessellated {
     /// Tessellates `scene` (in parallel over texel rows).
     #[must_use]
     pub fn new(scene: &Scene) -> Self {
-        let side = scene.field.side() as f64;
-        let scale = scene.tiling * side;
+        // Cells: texels of the height map, or tiles of the object (in uv units times tiling).
+        let cells_per_tile = match &scene.content {
+            Content::Displacement(field) => field.side() as f64,
+            Content::Shell(_) => 1.0,
+        };
+        let scale = scene.tiling * cells_per_tile;
         // (base triangle, texel row) jobs.
         let mut jobs = Vec::new();
         let mut skipped = 0;
@@ -92,13 +97,22 @@ impl Tessellated {
                 };
                 let mut out = Vec::new();
                 for x in x0..=x1 {
-                    let c = scene.field.texel_corners(x, y);
-                    let h = c.map(|s| f64::from(s) / f64::from(HEIGHT_ONE));
-                    let (u0, v0, u1, v1) = (x as f64, y as f64, x as f64 + 1.0, y as f64 + 1.0);
-                    let micro = [
-                        [[u0, v0, h[0]], [u1, v0, h[1]], [u1, v1, h[3]]],
-                        [[u0, v0, h[0]], [u1, v1, h[3]], [u0, v1, h[2]]],
-                    ];
+                    let micro: Vec<[Uvh; 3]> = match &scene.content {
+                        Content::Displacement(field) => {
+                            let c = field.texel_corners(x, y);
+                            let h = c.map(|s| f64::from(s) / f64::from(HEIGHT_ONE));
+                            let (u0, v0) = (x as f64, y as f64);
+                            let (u1, v1) = (u0 + 1.0, v0 + 1.0);
+                            vec![
+                                [[u0, v0, h[0]], [u1, v0, h[1]], [u1, v1, h[3]]],
+                                [[u0, v0, h[0]], [u1, v1, h[3]], [u0, v1, h[2]]],
+                            ]
+                        }
+                        Content::Shell(object) => object
+                            .iter()
+                            .map(|t| t.map(|p| [p.x + x as f64, p.y + y as f64, p.z]))
+                            .collect(),
+                    };
                     for m in micro {
                         let mut poly = m.to_vec();
                         for &(a, nrm) in &edges {

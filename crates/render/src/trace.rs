@@ -4,9 +4,9 @@
 //! rays are measured as in the paper. Rays are generated and shaded in f64; only the
 //! intersection runs in the method's precision.
 
-use crate::scenes::Scene;
+use crate::scenes::{Content, Scene};
 use crate::tessellate::Tessellated;
-use nlrt_accel::{DisplacedSurface, TraversalStats};
+use nlrt_accel::{DisplacedSurface, ShellObject, ShellSurface, TraversalStats};
 use nlrt_poly::glam::DVec3;
 use nlrt_poly::{Real, Vector3};
 use nlrt_shellmap::Ray;
@@ -68,27 +68,43 @@ pub trait Tracer: Sync {
     fn memory_bytes(&self) -> usize;
 }
 
-/// Nonlinear ray tracing in precision `T`.
-pub struct Nonlinear<T: Real> {
-    /// The surface.
-    pub surface: DisplacedSurface<T>,
+/// Nonlinear ray tracing in precision `T`: a displaced surface or a shell-mapped object.
+pub enum Nonlinear<T: Real> {
+    /// Displacement mapping.
+    Displaced(DisplacedSurface<T>),
+    /// Shell mapping of an instanced object.
+    Shell(ShellSurface<T>),
 }
 
 impl<T: Real> Nonlinear<T> {
-    /// Builds the surface of `scene`.
+    /// Builds the acceleration data of `scene`.
     ///
     /// # Panics
     /// Never for valid scenes (built-in scenes are).
     #[must_use]
     pub fn new(scene: &Scene) -> Self {
-        let surface = DisplacedSurface::new(
-            scene.mesh::<T>(),
-            scene.field.clone(),
-            T::from_f64(scene.height_scale),
-            T::from_f64(scene.tiling),
-        )
-        .expect("valid scene");
-        Self { surface }
+        let (scale, tiling) = (T::from_f64(scene.height_scale), T::from_f64(scene.tiling));
+        match &scene.content {
+            Content::Displacement(field) => Self::Displaced(
+                DisplacedSurface::new(scene.mesh::<T>(), field.clone(), scale, tiling)
+                    .expect("valid scene"),
+            ),
+            Content::Shell(object) => {
+                let v =
+                    |p: &DVec3| T::Vec3::new(T::from_f64(p.x), T::from_f64(p.y), T::from_f64(p.z));
+                let object = ShellObject::new(
+                    object
+                        .iter()
+                        .map(|t| [v(&t[0]), v(&t[1]), v(&t[2])])
+                        .collect(),
+                )
+                .expect("valid object");
+                Self::Shell(
+                    ShellSurface::new(scene.mesh::<T>(), object, scale, tiling)
+                        .expect("valid scene"),
+                )
+            }
+        }
     }
 }
 
@@ -102,16 +118,26 @@ impl<T: Real> Tracer for Nonlinear<T> {
         } else {
             T::INFINITY
         };
-        let hit = self
-            .surface
-            .intersect(&ray, T::from_f64(t_min), t_max, &mut stats)?;
-        let n = self.surface.normal(&hit, ray.dir)?;
+        let t_min = T::from_f64(t_min);
+        let (t, n) = match self {
+            Self::Displaced(s) => {
+                let hit = s.intersect(&ray, t_min, t_max, &mut stats)?;
+                (hit.hit.t, s.normal(&hit, ray.dir)?)
+            }
+            Self::Shell(s) => {
+                let hit = s.intersect(&ray, t_min, t_max, &mut stats)?;
+                (hit.hit.t, s.normal(&hit, ray.dir)?)
+            }
+        };
         let n = DVec3::new(n.x().to_f64(), n.y().to_f64(), n.z().to_f64());
-        Some((hit.hit.t.to_f64(), n))
+        Some((t.to_f64(), n))
     }
 
     fn memory_bytes(&self) -> usize {
-        self.surface.memory_bytes()
+        match self {
+            Self::Displaced(s) => s.memory_bytes(),
+            Self::Shell(s) => s.memory_bytes(),
+        }
     }
 }
 

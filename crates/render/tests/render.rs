@@ -39,11 +39,25 @@ fn nonlinear_equals_tessellation_where_the_map_is_affine() {
     );
 }
 
+/// The cornell scene's base is a sphere with radial normals: every prism is a cone from the
+/// centre, so a texture-space plane maps to a world-space plane and the shell-mapped object
+/// equals its tessellation (same bound as the affine case).
+#[test]
+fn shell_mapping_equals_tessellation_where_planes_map_to_planes() {
+    let scene = scenes::cornell(4);
+    let reference = render(&scene, &Tessellated::new(&scene), &small(), &|_| {});
+    let nl64 = render(&scene, &Nonlinear::<f64>::new(&scene), &small(), &|_| {});
+    let e = compare(&nl64, &reference);
+    assert!(reference.depth.iter().filter(|d| !d.is_nan()).count() > 200);
+    assert_eq!(e.mismatches, 0, "{e:?}");
+    assert!(e.depth_max < 1e-9, "{e:?}");
+}
+
 /// On curved bases (cylinder, fur torus) the two surfaces differ by design; they still agree
 /// on nearly every pixel.
 #[test]
 fn curved_scenes_agree_with_the_reference_on_most_pixels() {
-    for scene in [scenes::cylinder(64), scenes::fur(32)] {
+    for scene in [scenes::cylinder(64), scenes::fur(32), scenes::scales()] {
         let reference = render(&scene, &Tessellated::new(&scene), &small(), &|_| {});
         let nl = render(&scene, &Nonlinear::<f64>::new(&scene), &small(), &|_| {});
         let e = compare(&nl, &reference);
