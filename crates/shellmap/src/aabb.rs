@@ -48,6 +48,76 @@ pub fn intersect_box<T: Real>(
     if !(h_lo <= h_hi && lo[0] <= hi[0] && lo[1] <= hi[1]) {
         return None;
     }
+    let [t0, t1, t2] = prism.uv;
+    let (du1, du2) = ((t1.x() - t0.x()).abs(), (t2.x() - t0.x()).abs());
+    let (dv1, dv2) = ((t1.y() - t0.y()).abs(), (t2.y() - t0.y()).abs());
+    let magnitude = |i: usize, base: T, e1: T, e2: T| {
+        ray.d[i].abs().mul_add(
+            base.abs(),
+            ray.alpha[i].abs().mul_add(e1, ray.beta[i].abs() * e2),
+        )
+    };
+    let mu: [T; 3] = core::array::from_fn(|i| magnitude(i, t0.x(), du1, du2));
+    let mv: [T; 3] = core::array::from_fn(|i| magnitude(i, t0.y(), dv1, dv2));
+    let md: [T; 3] = core::array::from_fn(|i| ray.d[i].abs());
+    let eight_u = T::from_i32(8) * T::UNIT_ROUNDOFF;
+    let gamma8 = eight_u / (T::ONE - eight_u);
+    let abs_at = |c: &[T; 3], h: T| c[2].mul_add(h, c[1]).mul_add(h, c[0]);
+    // Early rejection by interval arithmetic: the ranges of U, V and D over [h_lo, h_hi]
+    // (ends and vertex of each quadratic), then u = U / D and v = V / D by interval division
+    // where D keeps one sign, widened by the same rounding bound as the exact test below.
+    // Sound (never rejects what the exact test keeps) and cheap; most boxes of a traversal
+    // are rejected here without solving a quadratic.
+    let range = |c: &[T; 3]| {
+        let at = |h: T| c[2].mul_add(h, c[1]).mul_add(h, c[0]);
+        let (mut lo_q, mut hi_q) = (at(h_lo).min(at(h_hi)), at(h_lo).max(at(h_hi)));
+        if c[2] != T::ZERO {
+            let vertex = -c[1] / (T::TWO * c[2]);
+            if vertex > h_lo && vertex < h_hi {
+                lo_q = lo_q.min(at(vertex));
+                hi_q = hi_q.max(at(vertex));
+            }
+        }
+        (lo_q, hi_q)
+    };
+    let (d_lo, d_hi) = range(&ray.d);
+    let h_abs = h_lo.abs().max(h_hi.abs());
+    let d_err = gamma8 * abs_at(&md, h_abs);
+    if d_lo - d_err > T::ZERO || d_hi + d_err < T::ZERO {
+        let (d_min, d_max) = if d_lo > T::ZERO {
+            (d_lo - d_err, d_hi + d_err)
+        } else {
+            (-(d_hi + d_err), -(d_lo - d_err))
+        };
+        let sign = if d_lo > T::ZERO { T::ONE } else { -T::ONE };
+        let quotient = |c: &[T; 3], m: &[T; 3]| {
+            let (q_lo, q_hi) = range(c);
+            let err = gamma8 * abs_at(m, h_abs);
+            let (q_lo, q_hi) = if sign > T::ZERO {
+                (q_lo - err, q_hi + err)
+            } else {
+                (-(q_hi + err), -(q_lo - err))
+            };
+            // q / d for q in [q_lo, q_hi], d in [d_min, d_max] with d_min > 0.
+            let lo_r = if q_lo >= T::ZERO {
+                q_lo / d_max
+            } else {
+                q_lo / d_min
+            };
+            let hi_r = if q_hi >= T::ZERO {
+                q_hi / d_min
+            } else {
+                q_hi / d_max
+            };
+            // One more relative rounding of the divisions.
+            (lo_r - lo_r.abs() * eight_u, hi_r + hi_r.abs() * eight_u)
+        };
+        let (u_lo, u_hi) = quotient(&ray.u, &mu);
+        let (v_lo, v_hi) = quotient(&ray.v, &mv);
+        if u_hi < lo[0] || u_lo > hi[0] || v_hi < lo[1] || v_lo > hi[1] {
+            return None;
+        }
+    }
     let mut candidates = [T::ZERO; MAX_CANDIDATES];
     let mut n = 0;
     let mut push = |h: T| {
@@ -107,21 +177,6 @@ pub fn intersect_box<T: Real>(
     // polynomials with absolute-valued terms. Without it, a curve running along a face (a
     // base triangle degenerate in uv onto a texel edge) is put on either side of the face by
     // rounding, and a box whose microtriangles the curve hits is culled.
-    let [t0, t1, t2] = prism.uv;
-    let (du1, du2) = ((t1.x() - t0.x()).abs(), (t2.x() - t0.x()).abs());
-    let (dv1, dv2) = ((t1.y() - t0.y()).abs(), (t2.y() - t0.y()).abs());
-    let magnitude = |i: usize, base: T, e1: T, e2: T| {
-        ray.d[i].abs().mul_add(
-            base.abs(),
-            ray.alpha[i].abs().mul_add(e1, ray.beta[i].abs() * e2),
-        )
-    };
-    let mu: [T; 3] = core::array::from_fn(|i| magnitude(i, t0.x(), du1, du2));
-    let mv: [T; 3] = core::array::from_fn(|i| magnitude(i, t0.y(), dv1, dv2));
-    let md: [T; 3] = core::array::from_fn(|i| ray.d[i].abs());
-    let eight_u = T::from_i32(8) * T::UNIT_ROUNDOFF;
-    let gamma8 = eight_u / (T::ONE - eight_u);
-    let abs_at = |c: &[T; 3], h: T| c[2].mul_add(h, c[1]).mul_add(h, c[0]);
     let inside = |h: T| {
         let a = h.abs();
         let d = d[2].mul_add(h, d[1]).mul_add(h, d[0]);
