@@ -183,3 +183,128 @@ pub fn fuzz_microtriangle<T: Real>(data: &[u8]) {
         );
     }
 }
+
+/// Layout shared by the traversal targets: a header byte for the map or object, then raw
+/// values for one base triangle (positions, normals, uvs: 24 values) and a ray (6 values).
+fn base_and_ray<T: Real>(
+    x: &[T],
+) -> Option<(nlrt_accel::BaseMesh<T>, nlrt_shellmap::Ray<T>)> {
+    use nlrt_poly::{Vector2, Vector3};
+    let v3 = |i: usize| T::Vec3::new(x[i], x[i + 1], x[i + 2]);
+    let mesh = nlrt_accel::BaseMesh::new(
+        vec![v3(0), v3(3), v3(6)],
+        vec![v3(9), v3(12), v3(15)],
+        vec![
+            T::Vec2::new(x[18], x[19]),
+            T::Vec2::new(x[20], x[21]),
+            T::Vec2::new(x[22], x[23]),
+        ],
+        vec![[0, 1, 2]],
+    )
+    .ok()?;
+    let ray = nlrt_shellmap::Ray::new(v3(24), v3(27))?;
+    Some((mesh, ray))
+}
+
+/// Texel (or tile) ranges up to this many cells are also tested by brute force.
+const BRUTE_FORCE_CELLS: i64 = 4096;
+
+/// The displacement traversal target: a small height map (side 2 to 16, any samples, either
+/// wrap mode, tiling 1 to 4), one base triangle and a ray, all from raw bytes. No panic; a hit
+/// is finite, in `[0, inf)`, with `h` in `[0, 1]` and `(alpha, beta)` in the base triangle;
+/// and the accelerated hit is never nearer than the brute-force one (the traversal tests a
+/// subset of the same texels with the same arithmetic), checked when the texel range is small.
+pub fn fuzz_displacement<T: Real>(data: &[u8]) {
+    use nlrt_accel::{DisplacedSurface, HeightField, TraversalStats, Wrap};
+    let header = data.first().copied().unwrap_or(0);
+    let side = 2usize << (header & 3);
+    let wrap = if header & 4 == 0 { Wrap::Repeat } else { Wrap::Clamp };
+    let tiling = T::from_i32(i32::from((header >> 3) & 3) + 1);
+    let sample_bytes = data.get(1..).unwrap_or(&[]);
+    let samples = (0..side * side)
+        .map(|i| {
+            let b = |k: usize| u16::from(sample_bytes.get(2 * i + k).copied().unwrap_or(0));
+            b(0) | (b(1) << 8)
+        })
+        .collect();
+    let field = HeightField::new(side, samples, wrap).expect("valid side");
+    let rest = data.get(1 + 2 * side * side..).unwrap_or(&[]);
+    let x = decode::<T, 30>(rest).coeffs;
+    let Some((mesh, ray)) = base_and_ray(&x) else {
+        return;
+    };
+    let Ok(surface) = DisplacedSurface::new(mesh, field, T::ONE, tiling) else {
+        return;
+    };
+    let fast = surface.intersect(&ray, T::ZERO, T::INFINITY, &mut TraversalStats::default());
+    if let Some(hit) = fast {
+        let h = hit.hit;
+        assert!(
+            [h.t, h.alpha, h.beta, h.h, h.u, h.v].iter().all(|v| v.is_finite()),
+            "non-finite hit {hit:?}"
+        );
+        assert!(h.t >= T::ZERO && h.h >= T::ZERO && h.h <= T::ONE, "hit out of range {hit:?}");
+        assert!(
+            h.alpha >= T::ZERO && h.beta >= T::ZERO && h.alpha + h.beta <= T::ONE,
+            "hit outside the prism {hit:?}"
+        );
+    }
+    let [x0, y0, x1, y1] = surface.roots(0).texels.map(i64::from);
+    if (x1 - x0 + 1) * (y1 - y0 + 1) <= BRUTE_FORCE_CELLS
+        && let Some(f) = fast
+    {
+        let brute = surface.intersect_brute_force(&ray, T::ZERO, T::INFINITY);
+        let b = brute.expect("brute force tests every texel the traversal tests");
+        assert!(f.hit.t >= b.hit.t, "accelerated {f:?} nearer than brute force {b:?}");
+    }
+}
+
+/// The shell traversal target: up to four object triangles in the unit tile (raw values;
+/// out-of-tile objects must be rejected cleanly), tiling 1 to 8, one base triangle and a
+/// ray. Same properties as [`fuzz_displacement`].
+pub fn fuzz_shell<T: Real>(data: &[u8]) {
+    use nlrt_accel::{ShellObject, ShellSurface, TraversalStats};
+    use nlrt_poly::Vector3;
+    let header = data.first().copied().unwrap_or(0);
+    let count = usize::from(header & 3) + 1;
+    let tiling = T::from_i32(i32::from((header >> 2) & 7) + 1);
+    let x = decode::<T, 66>(data.get(1..).unwrap_or(&[])).coeffs;
+    let unit = |v: T| {
+        // Map raw values into [0, 1] mostly, but keep a few out-of-range ones (errors).
+        if v.is_finite() && v.abs() <= T::from_i32(2) { v.abs() * T::HALF } else { v }
+    };
+    let object: Vec<[T::Vec3; 3]> = (0..count)
+        .map(|t| {
+            core::array::from_fn(|k| {
+                let i = 30 + 9 * t + 3 * k;
+                T::Vec3::new(unit(x[i]), unit(x[i + 1]), unit(x[i + 2]))
+            })
+        })
+        .collect();
+    let Ok(object) = ShellObject::new(object) else {
+        return;
+    };
+    let Some((mesh, ray)) = base_and_ray(&x) else {
+        return;
+    };
+    let Ok(surface) = ShellSurface::new(mesh, object, T::ONE, tiling) else {
+        return;
+    };
+    let fast = surface.intersect(&ray, T::ZERO, T::INFINITY, &mut TraversalStats::default());
+    if let Some(hit) = fast {
+        let h = hit.hit;
+        assert!(
+            [h.t, h.alpha, h.beta, h.h, h.u, h.v].iter().all(|v| v.is_finite()),
+            "non-finite hit {hit:?}"
+        );
+        assert!(h.t >= T::ZERO && h.h >= T::ZERO && h.h <= T::ONE, "hit out of range {hit:?}");
+        let [x0, y0, x1, y1] = surface.roots(0).texels.map(i64::from);
+        if (x1 - x0 + 1) * (y1 - y0 + 1) > BRUTE_FORCE_CELLS {
+            return;
+        }
+        let brute = surface
+            .intersect_brute_force(&ray, T::ZERO, T::INFINITY)
+            .expect("brute force tests every tile the traversal tests");
+        assert!(h.t >= brute.hit.t, "accelerated {hit:?} nearer than brute force {brute:?}");
+    }
+}

@@ -107,3 +107,23 @@ fn write_seed_corpus() {
     write::<f32>("quadratic");
     write::<f64>("quadratic");
 }
+
+#[test]
+fn replay_displacement_f32() {
+    replay("displacement_f32", nlrt_tests::fuzz_input::fuzz_displacement::<f32>);
+}
+
+#[test]
+fn replay_displacement_f64() {
+    replay("displacement_f64", nlrt_tests::fuzz_input::fuzz_displacement::<f64>);
+}
+
+#[test]
+fn replay_shell_f32() {
+    replay("shell_f32", nlrt_tests::fuzz_input::fuzz_shell::<f32>);
+}
+
+#[test]
+fn replay_shell_f64() {
+    replay("shell_f64", nlrt_tests::fuzz_input::fuzz_shell::<f64>);
+}

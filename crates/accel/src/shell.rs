@@ -215,6 +215,12 @@ impl<T: Real> ShellSurface<T> {
         &self.object
     }
 
+    /// Root tiles of base triangle `i` (the `texels` field holds its tile range).
+    #[must_use]
+    pub fn roots(&self, i: usize) -> RootNodes {
+        self.roots[i]
+    }
+
     /// The base mesh.
     #[must_use]
     pub fn mesh(&self) -> &BaseMesh<T> {
