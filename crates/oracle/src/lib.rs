@@ -10,10 +10,12 @@
 //! - [`Truth::judge`]: a solver's answer measured against them: error in ulps of the target
 //!   type, missed roots, spurious roots, with tolerances scaled by each root's conditioning.
 //! - [`families`]: the hard cubic families and random generators shared by tests and reports.
+//! - [`crossing`]: exact ray-triangle crossings (rationals), for watertightness.
 //! - [`shell`]: the true hit of a world ray on a microtriangle of a prism (Ogaki 2023, Eq. 1-11).
 //!
 //! Building it needs GMP's build tools (`m4`); the project's test script installs them.
 
+pub mod crossing;
 pub mod exact;
 pub mod families;
 pub mod measure;

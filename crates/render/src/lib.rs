@@ -13,3 +13,4 @@ pub mod scenes;
 pub mod solvers;
 pub mod tessellate;
 pub mod trace;
+pub mod watertight;

@@ -7,6 +7,7 @@ use clap::{Parser, Subcommand, ValueEnum};
 use nlrt_render::report::{self, ReportOptions};
 use nlrt_render::scenes::{self, SCENE_NAMES, Size};
 use nlrt_render::solvers;
+use nlrt_render::watertight;
 use nlrt_render::trace::{Method, RenderOptions};
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -122,6 +123,24 @@ enum Command {
         /// Random cubics per precision for the solver table.
         #[arg(long, default_value_t = 50_000)]
         solver_samples: usize,
+    },
+    /// Leaks of nonlinear tracing, decided by exact arithmetic: rays that reach a base
+    /// triangle from outside (so must have hit the displaced surface) but were not hit.
+    Watertight {
+        /// Displacement scene: mountain, cylinder, fur or torus.
+        scene: String,
+        /// Rays: a square grid of camera rays with at least this many.
+        #[arg(long, default_value_t = 65_536, value_parser = clap::value_parser!(u64).range(1..=100_000_000))]
+        rays: u64,
+        /// Precision (default: both).
+        #[arg(long, value_enum)]
+        precision: Option<Precision>,
+        /// Map sizes of the built-in scenes.
+        #[arg(long, value_enum, default_value = "small")]
+        scene_size: SceneSize,
+        /// Directory for the leak images (`<scene>-leaks-<precision>.png`).
+        #[arg(short, long)]
+        output: Option<PathBuf>,
     },
     /// Speed against error of the cubic solvers (nlrt-poly, closed form, `roots` crate) for
     /// f32 and f64, judged by the MPFR oracle.
@@ -285,6 +304,51 @@ fn main() -> ExitCode {
             args,
             solver_samples,
         } => report_command(output, &args, solver_samples),
+        Command::Watertight {
+            scene,
+            rays,
+            precision,
+            scene_size,
+            output,
+        } => {
+            if let Err(e) = check_scenes(std::slice::from_ref(&scene)) {
+                return fail("watertight", e);
+            }
+            let Some(built) = scenes::builtin(&scene, scene_size.into()) else {
+                return fail("watertight", "unknown scene");
+            };
+            let side = ((rays as f64).sqrt().ceil() as usize).max(1);
+            let precisions = match precision {
+                Some(p) => vec![p],
+                None => vec![Precision::F32, Precision::F64],
+            };
+            println!("| scene | precision | rays | decided | leaks | rate | 95% interval | seconds |");
+            println!("|---|---|---|---|---|---|---|---|");
+            for p in precisions {
+                let result = match p {
+                    Precision::F32 => watertight::measure::<f32>(&built, side),
+                    Precision::F64 => watertight::measure::<f64>(&built, side),
+                };
+                let r = match result {
+                    Ok(r) => r,
+                    Err(e) => return fail("watertight", e),
+                };
+                let (lo, hi) = r.wilson_95();
+                println!(
+                    "| {scene} | {} | {} | {} | {} | {:.2e} | [{:.1e}, {:.1e}] | {:.1} |",
+                    r.precision, r.rays, r.decided, r.leaks, r.rate(), lo, hi, r.seconds
+                );
+                if let Some(dir) = &output {
+                    let path = dir.join(format!("{scene}-leaks-{}.png", r.precision));
+                    if let Err(e) = std::fs::create_dir_all(dir).and_then(|()| {
+                        nlrt_render::trace::write_png(&path, side, side, &watertight::leak_image(&r))
+                    }) {
+                        return fail("watertight", format!("cannot write {}: {e}", path.display()));
+                    }
+                }
+            }
+            ExitCode::SUCCESS
+        }
         Command::Solvers {
             samples,
             seed,
