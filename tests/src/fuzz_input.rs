@@ -186,9 +186,7 @@ pub fn fuzz_microtriangle<T: Real>(data: &[u8]) {
 
 /// Layout shared by the traversal targets: a header byte for the map or object, then raw
 /// values for one base triangle (positions, normals, uvs: 24 values) and a ray (6 values).
-fn base_and_ray<T: Real>(
-    x: &[T],
-) -> Option<(nlrt_accel::BaseMesh<T>, nlrt_shellmap::Ray<T>)> {
+fn base_and_ray<T: Real>(x: &[T]) -> Option<(nlrt_accel::BaseMesh<T>, nlrt_shellmap::Ray<T>)> {
     use nlrt_poly::{Vector2, Vector3};
     let v3 = |i: usize| T::Vec3::new(x[i], x[i + 1], x[i + 2]);
     let mesh = nlrt_accel::BaseMesh::new(
@@ -218,7 +216,11 @@ pub fn fuzz_displacement<T: Real>(data: &[u8]) {
     use nlrt_accel::{DisplacedSurface, HeightField, TraversalStats, Wrap};
     let header = data.first().copied().unwrap_or(0);
     let side = 2usize << (header & 3);
-    let wrap = if header & 4 == 0 { Wrap::Repeat } else { Wrap::Clamp };
+    let wrap = if header & 4 == 0 {
+        Wrap::Repeat
+    } else {
+        Wrap::Clamp
+    };
     let tiling = T::from_i32(i32::from((header >> 3) & 3) + 1);
     let sample_bytes = data.get(1..).unwrap_or(&[]);
     let samples = (0..side * side)
@@ -240,10 +242,15 @@ pub fn fuzz_displacement<T: Real>(data: &[u8]) {
     if let Some(hit) = fast {
         let h = hit.hit;
         assert!(
-            [h.t, h.alpha, h.beta, h.h, h.u, h.v].iter().all(|v| v.is_finite()),
+            [h.t, h.alpha, h.beta, h.h, h.u, h.v]
+                .iter()
+                .all(|v| v.is_finite()),
             "non-finite hit {hit:?}"
         );
-        assert!(h.t >= T::ZERO && h.h >= T::ZERO && h.h <= T::ONE, "hit out of range {hit:?}");
+        assert!(
+            h.t >= T::ZERO && h.h >= T::ZERO && h.h <= T::ONE,
+            "hit out of range {hit:?}"
+        );
         assert!(
             h.alpha >= T::ZERO && h.beta >= T::ZERO && h.alpha + h.beta <= T::ONE,
             "hit outside the prism {hit:?}"
@@ -255,7 +262,10 @@ pub fn fuzz_displacement<T: Real>(data: &[u8]) {
     {
         let brute = surface.intersect_brute_force(&ray, T::ZERO, T::INFINITY);
         let b = brute.expect("brute force tests every texel the traversal tests");
-        assert!(f.hit.t >= b.hit.t, "accelerated {f:?} nearer than brute force {b:?}");
+        assert!(
+            f.hit.t >= b.hit.t,
+            "accelerated {f:?} nearer than brute force {b:?}"
+        );
     }
 }
 
@@ -271,7 +281,11 @@ pub fn fuzz_shell<T: Real>(data: &[u8]) {
     let x = decode::<T, 66>(data.get(1..).unwrap_or(&[])).coeffs;
     let unit = |v: T| {
         // Map raw values into [0, 1] mostly, but keep a few out-of-range ones (errors).
-        if v.is_finite() && v.abs() <= T::from_i32(2) { v.abs() * T::HALF } else { v }
+        if v.is_finite() && v.abs() <= T::from_i32(2) {
+            v.abs() * T::HALF
+        } else {
+            v
+        }
     };
     let object: Vec<[T::Vec3; 3]> = (0..count)
         .map(|t| {
@@ -294,10 +308,15 @@ pub fn fuzz_shell<T: Real>(data: &[u8]) {
     if let Some(hit) = fast {
         let h = hit.hit;
         assert!(
-            [h.t, h.alpha, h.beta, h.h, h.u, h.v].iter().all(|v| v.is_finite()),
+            [h.t, h.alpha, h.beta, h.h, h.u, h.v]
+                .iter()
+                .all(|v| v.is_finite()),
             "non-finite hit {hit:?}"
         );
-        assert!(h.t >= T::ZERO && h.h >= T::ZERO && h.h <= T::ONE, "hit out of range {hit:?}");
+        assert!(
+            h.t >= T::ZERO && h.h >= T::ZERO && h.h <= T::ONE,
+            "hit out of range {hit:?}"
+        );
         let [x0, y0, x1, y1] = surface.roots(0).texels.map(i64::from);
         if (x1 - x0 + 1) * (y1 - y0 + 1) > BRUTE_FORCE_CELLS {
             return;
@@ -305,6 +324,9 @@ pub fn fuzz_shell<T: Real>(data: &[u8]) {
         let brute = surface
             .intersect_brute_force(&ray, T::ZERO, T::INFINITY)
             .expect("brute force tests every tile the traversal tests");
-        assert!(h.t >= brute.hit.t, "accelerated {hit:?} nearer than brute force {brute:?}");
+        assert!(
+            h.t >= brute.hit.t,
+            "accelerated {hit:?} nearer than brute force {brute:?}"
+        );
     }
 }

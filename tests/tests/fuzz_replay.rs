@@ -110,12 +110,18 @@ fn write_seed_corpus() {
 
 #[test]
 fn replay_displacement_f32() {
-    replay("displacement_f32", nlrt_tests::fuzz_input::fuzz_displacement::<f32>);
+    replay(
+        "displacement_f32",
+        nlrt_tests::fuzz_input::fuzz_displacement::<f32>,
+    );
 }
 
 #[test]
 fn replay_displacement_f64() {
-    replay("displacement_f64", nlrt_tests::fuzz_input::fuzz_displacement::<f64>);
+    replay(
+        "displacement_f64",
+        nlrt_tests::fuzz_input::fuzz_displacement::<f64>,
+    );
 }
 
 #[test]

@@ -38,7 +38,12 @@ fn dot(a: &[Rational; 3], b: &[Rational; 3]) -> Rational {
 /// exactly; `None` when it misses, runs parallel to the plane, or an input is not finite.
 #[must_use]
 pub fn ray_triangle(o: [f64; 3], d: [f64; 3], tri: [[f64; 3]; 3]) -> Option<Crossing> {
-    if !o.iter().chain(&d).chain(tri.iter().flatten()).all(|v| v.is_finite()) {
+    if !o
+        .iter()
+        .chain(&d)
+        .chain(tri.iter().flatten())
+        .all(|v| v.is_finite())
+    {
         return None;
     }
     let (o, d) = (o.map(q), d.map(q));
@@ -76,7 +81,13 @@ mod tests {
     fn crossings_are_exact_on_edges_and_sides() {
         let tri = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
         let c = ray_triangle([0.25, 0.25, 2.0], [0.0, 0.0, -1.0], tri).unwrap();
-        assert_eq!(c, Crossing { t: 2.0, from_front: true });
+        assert_eq!(
+            c,
+            Crossing {
+                t: 2.0,
+                from_front: true
+            }
+        );
         // Exactly on the hypotenuse: inside (edges included), from below: back side.
         let c = ray_triangle([0.5, 0.5, -1.0], [0.0, 0.0, 1.0], tri).unwrap();
         assert!(!c.from_front && c.t == 1.0);

@@ -7,8 +7,8 @@ use clap::{Parser, Subcommand, ValueEnum};
 use nlrt_render::report::{self, ReportOptions};
 use nlrt_render::scenes::{self, SCENE_NAMES, Size};
 use nlrt_render::solvers;
-use nlrt_render::watertight;
 use nlrt_render::trace::{Method, RenderOptions};
+use nlrt_render::watertight;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -193,6 +193,41 @@ fn report_command(output: PathBuf, args: &RenderArgs, solver_samples: usize) -> 
         Ok(md) => md,
         Err(e) => return fail("report", e),
     };
+    eprintln!("watertightness...");
+    let mut leaks_md = String::from(
+        "| scene | precision | rays | decided | leaks | rate | 95% interval |\n|---|---|---|---|---|---|---|\n",
+    );
+    for name in ["torus", "fur", "mountain"] {
+        let Some(scene) = scenes::builtin(name, args.scene_size.into()) else {
+            continue;
+        };
+        for result in [
+            watertight::measure::<f32>(&scene, 256),
+            watertight::measure::<f64>(&scene, 256),
+        ] {
+            let r = match result {
+                Ok(r) => r,
+                Err(e) => return fail("report", e),
+            };
+            let (lo, hi) = r.wilson_95();
+            leaks_md.push_str(&format!(
+                "| {name} | {} | {} | {} | {} | {:.2e} | [{:.1e}, {:.1e}] |\n",
+                r.precision,
+                r.rays,
+                r.decided,
+                r.leaks,
+                r.rate(),
+                lo,
+                hi
+            ));
+            let path = output.join(format!("{name}-leaks-{}.png", r.precision));
+            if let Err(e) =
+                nlrt_render::trace::write_png(&path, 256, 256, &watertight::leak_image(&r))
+            {
+                return fail("report", format!("cannot write {}: {e}", path.display()));
+            }
+        }
+    }
     eprintln!("solver table ({solver_samples} cubics per precision)...");
     let solver_opts = solvers::Options {
         samples: solver_samples.max(1),
@@ -200,7 +235,10 @@ fn report_command(output: PathBuf, args: &RenderArgs, solver_samples: usize) -> 
     };
     let solver_md = solvers::markdown(&solvers::run(&solver_opts), &solver_opts);
     let md = format!(
-        "# nlrt report\n\nWritten by `nlrt report` in {:.0} s.\n\n{scenes_md}\n## Cubic solvers\n\n{solver_md}",
+        "# nlrt report\n\nWritten by `nlrt report` in {:.0} s.\n\n{scenes_md}\n## Watertightness\n\n\
+         Camera rays that reach a base triangle from outside, decided exactly (GMP rationals), \
+         and whether the tracer hit the surface before (`nlrt watertight`; leak images \
+         `<scene>-leaks-<precision>.png`: grey hit, red leak, black undecided).\n\n{leaks_md}\n## Cubic solvers\n\n{solver_md}",
         start.elapsed().as_secs_f64()
     );
     let path = output.join("report.md");
@@ -322,7 +360,9 @@ fn main() -> ExitCode {
                 Some(p) => vec![p],
                 None => vec![Precision::F32, Precision::F64],
             };
-            println!("| scene | precision | rays | decided | leaks | rate | 95% interval | seconds |");
+            println!(
+                "| scene | precision | rays | decided | leaks | rate | 95% interval | seconds |"
+            );
             println!("|---|---|---|---|---|---|---|---|");
             for p in precisions {
                 let result = match p {
@@ -336,14 +376,29 @@ fn main() -> ExitCode {
                 let (lo, hi) = r.wilson_95();
                 println!(
                     "| {scene} | {} | {} | {} | {} | {:.2e} | [{:.1e}, {:.1e}] | {:.1} |",
-                    r.precision, r.rays, r.decided, r.leaks, r.rate(), lo, hi, r.seconds
+                    r.precision,
+                    r.rays,
+                    r.decided,
+                    r.leaks,
+                    r.rate(),
+                    lo,
+                    hi,
+                    r.seconds
                 );
                 if let Some(dir) = &output {
                     let path = dir.join(format!("{scene}-leaks-{}.png", r.precision));
                     if let Err(e) = std::fs::create_dir_all(dir).and_then(|()| {
-                        nlrt_render::trace::write_png(&path, side, side, &watertight::leak_image(&r))
+                        nlrt_render::trace::write_png(
+                            &path,
+                            side,
+                            side,
+                            &watertight::leak_image(&r),
+                        )
                     }) {
-                        return fail("watertight", format!("cannot write {}: {e}", path.display()));
+                        return fail(
+                            "watertight",
+                            format!("cannot write {}: {e}", path.display()),
+                        );
                     }
                 }
             }

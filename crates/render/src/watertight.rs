@@ -11,7 +11,7 @@
 //! slab, so the ray stays inside it); closed meshes (tori) have no other way in.
 //!
 //! This finds misses and hits beyond the base; a hit that is too far but still above the base
-//! is not detected (a lower bound on leaks). Displacement scenes only: a shell-mapped object
+//! is not detected (a lower bound on leaks). `NLRT_SHOW_LEAKS=1` prints each leak. Displacement scenes only: a shell-mapped object
 //! need not cover the base.
 
 use crate::scenes::{Content, Scene};
@@ -85,8 +85,13 @@ fn is_closed(scene: &Scene) -> bool {
     let mut edges: HashMap<_, u32> = HashMap::new();
     for t in &scene.triangles {
         for k in 0..3 {
-            let (a, b) = (key(scene.positions[t[k] as usize]), key(scene.positions[t[(k + 1) % 3] as usize]));
-            *edges.entry(if a < b { (a, b) } else { (b, a) }).or_default() += 1;
+            let (a, b) = (
+                key(scene.positions[t[k] as usize]),
+                key(scene.positions[t[(k + 1) % 3] as usize]),
+            );
+            *edges
+                .entry(if a < b { (a, b) } else { (b, a) })
+                .or_default() += 1;
         }
     }
     edges.values().all(|&c| c == 2)
@@ -123,7 +128,10 @@ fn to_f64<T: Real>(v: T::Vec3) -> [f64; 3] {
 /// A scene that is not a displacement scene.
 pub fn measure<T: Real>(scene: &Scene, rays_side: usize) -> Result<LeakReport, String> {
     if !matches!(scene.content, Content::Displacement(_)) {
-        return Err(format!("scene '{}' is shell-mapped; watertightness is measured on displacement scenes", scene.name));
+        return Err(format!(
+            "scene '{}' is shell-mapped; watertightness is measured on displacement scenes",
+            scene.name
+        ));
     }
     let start = std::time::Instant::now();
     let tracer = Nonlinear::<T>::new(scene);
@@ -139,8 +147,15 @@ pub fn measure<T: Real>(scene: &Scene, rays_side: usize) -> Result<LeakReport, S
             let base = prism.p.map(to_f64::<T>);
             let top = [0, 1, 2].map(|k| to_f64::<T>(prism.p[k] + prism.n[k]));
             // Orientation: the side the (scaled) normals point to.
-            let (a, b, c) = (DVec3::from(base[0]), DVec3::from(base[1]), DVec3::from(base[2]));
-            let normal_sum = prism.n.iter().fold(DVec3::ZERO, |s, &n| s + DVec3::from(to_f64::<T>(n)));
+            let (a, b, c) = (
+                DVec3::from(base[0]),
+                DVec3::from(base[1]),
+                DVec3::from(base[2]),
+            );
+            let normal_sum = prism
+                .n
+                .iter()
+                .fold(DVec3::ZERO, |s, &n| s + DVec3::from(to_f64::<T>(n)));
             let orient = (b - a).cross(c - a).dot(normal_sum).signum();
             (base, top, orient)
         })
@@ -193,11 +208,28 @@ pub fn measure<T: Real>(scene: &Scene, rays_side: usize) -> Result<LeakReport, S
             let hit = surface.intersect(&ray, T::ZERO, T::INFINITY, &mut TraversalStats::default());
             match hit {
                 Some(h) if h.hit.t.to_f64() <= t_base * (1.0 + LEAK_TOLERANCE) => Verdict::Hit,
-                _ => Verdict::Leak,
+                _ => {
+                    if std::env::var_os("NLRT_SHOW_LEAKS").is_some() {
+                        eprintln!(
+                            "leak at pixel ({x}, {y}): base crossing t = {t_base}, tracer {:?}",
+                            hit.map(|h| (
+                                h.hit.t.to_f64(),
+                                h.triangle,
+                                h.texel,
+                                h.part,
+                                h.hit.h.to_f64()
+                            ))
+                        );
+                    }
+                    Verdict::Leak
+                }
             }
         })
         .collect();
-    let decided = verdicts.iter().filter(|v| **v != Verdict::NotDecided).count();
+    let decided = verdicts
+        .iter()
+        .filter(|v| **v != Verdict::NotDecided)
+        .count();
     let leaks = verdicts.iter().filter(|v| **v == Verdict::Leak).count();
     Ok(LeakReport {
         precision: T::NAME,
