@@ -56,11 +56,11 @@ pub fn ray_triangle(o: [f64; 3], d: [f64; 3], tri: [[f64; 3]; 3]) -> Option<Cros
     }
     // t = n.(a - o) / n.d; barycentrics from the sub-areas (Cramer's rule).
     let s = sub(&o, &a);
-    let t = Rational::from(-dot(&n, &s)) / &denom;
+    let t = -dot(&n, &s) / &denom;
     if t <= 0 {
         return None;
     }
-    let p = [0, 1, 2].map(|i| Rational::from(&s[i] + Rational::from(&d[i] * &t)));
+    let p = [0, 1, 2].map(|i| &s[i] + Rational::from(&d[i] * &t));
     let nn = dot(&n, &n);
     let beta = dot(&cross(&p, &e2), &n) / nn.clone();
     let gamma = dot(&cross(&e1, &p), &n) / nn;
