@@ -118,6 +118,10 @@ fn may_cross(o: [f64; 3], d: [f64; 3], tri: &[[f64; 3]; 3]) -> bool {
     u >= -SLACK && v >= -SLACK && u + v <= 1.0 + SLACK && t > -SLACK * (1.0 + t.abs())
 }
 
+/// A prism's base and top triangles (f64, exactly the tracer's values) and the sign that
+/// orients the base's geometric normal like the vertex normals.
+type Caps = ([[f64; 3]; 3], [[f64; 3]; 3], f64);
+
 fn to_f64<T: Real>(v: T::Vec3) -> [f64; 3] {
     [v.x().to_f64(), v.y().to_f64(), v.z().to_f64()]
 }
@@ -141,7 +145,7 @@ pub fn measure<T: Real>(scene: &Scene, rays_side: usize) -> Result<LeakReport, S
     let closed = is_closed(scene);
     // Base and top-cap triangles exactly as the tracer's prisms have them.
     let mesh = surface.mesh();
-    let caps: Vec<([[f64; 3]; 3], [[f64; 3]; 3], f64)> = (0..mesh.triangle_count())
+    let caps: Vec<Caps> = (0..mesh.triangle_count())
         .map(|i| {
             let prism = surface.prism(i);
             let base = prism.p.map(to_f64::<T>);
