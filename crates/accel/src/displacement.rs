@@ -6,8 +6,8 @@ use core::fmt;
 use nlrt_poly::{Real, Vector2, Vector3};
 use nlrt_poly::{horner_with_bound_scaled, solve_cubic_in, solve_quadratic_in};
 use nlrt_shellmap::{
-    Hit, NonlinearRay, Prism, Ray, TexturePlane, alpha_beta_eq11, intersect_box,
-    intersect_flat_texel, intersect_prism, world_normal,
+    Hit, NonlinearRay, Prism, Ray, TexturePlane, alpha_beta_eq11, intersect_box, intersect_prism,
+    world_normal,
 };
 
 use crate::bvh::{Aabb, Bvh4, SlabRay};
@@ -253,19 +253,39 @@ impl<T: Real> DisplacedSurface<T> {
         (uv, h)
     }
 
+    /// The plane of the microtriangle `part` of texel `(x, y)` (normal with `n_h > 0`).
+    fn texel_plane(&self, x: i32, y: i32, part: TexelPart) -> Option<TexturePlane<T>> {
+        let ([u0, v0, u1, v1], [h00, h10, h01, h11]) = self.texel_geometry(x, y);
+        let p = |u: T, v: T, h: T| T::Vec3::new(u, v, h);
+        match part {
+            TexelPart::Lower => {
+                TexturePlane::through(&[p(u0, v0, h00), p(u1, v0, h10), p(u1, v1, h11)])
+            }
+            TexelPart::Upper => {
+                TexturePlane::through(&[p(u0, v0, h00), p(u1, v1, h11), p(u0, v1, h01)])
+            }
+            TexelPart::Flat => Some(TexturePlane {
+                normal: T::Vec3::new(T::ZERO, T::ZERO, T::ONE),
+                k: -h00,
+            }),
+        }
+    }
+
     /// The nearest hit on texel `(x, y)` with `t` in `[t_min, t_max]`.
     ///
-    /// The two microtriangles share the diagonal, and testing them independently leaks: each
-    /// solves its own plane's cubic, and a hit on or near the diagonal can land, after
-    /// rounding, just outside both (measured: every f32 leak of the mountain and torus was
-    /// one). So the diagonal is decided once, along the ray: the curve's heights are split
-    /// where it crosses the diagonal's vertical plane (the roots of `u - v - (u0 - v0)`,
-    /// times `D`), each piece lies wholly on one side and is searched with that side's plane
-    /// only, and at each split point the two planes' cubics are compared: in exact
-    /// arithmetic they have the same sign there (both planes contain the diagonal, above
-    /// which the curve point lies), so differing or uncertain signs mean the surface is
-    /// crossed at the split point itself, which is reported. The outer edges are still
-    /// judged from the hit point.
+    /// Testing microtriangles independently leaks: each solves its own plane's cubic and
+    /// judges its edges from its own hit point, so a hit on or near an edge shared with a
+    /// neighbour can land, after rounding, just outside both (measured: every f32 leak of the
+    /// mountain and torus scenes was one). So edges are decided once, along the ray: the
+    /// curve's heights are split where it crosses the texel's four edge lines and its
+    /// diagonal (roots of `U - u_face D`, `V - v_face D` and `U - V - (u0 - v0) D`: the same
+    /// quadratics, with the same coefficients, in the neighbouring texel), each piece lies
+    /// wholly inside or outside the texel and on one side of the diagonal and is searched with
+    /// that side's plane only, and at each split point the planes on its two sides (this
+    /// texel's, or the neighbour's across an outer edge) are compared: in exact arithmetic
+    /// their cubics have the same sign there (both planes contain the shared edge, above which
+    /// the curve point lies), so differing or uncertain signs mean the surface is crossed at
+    /// the split point itself, which is reported. A flat texel is the same with one plane.
     pub fn intersect_texel(
         &self,
         prism: &Prism<T>,
@@ -276,40 +296,53 @@ impl<T: Real> DisplacedSurface<T> {
         t_max: T,
     ) -> Option<(Hit<T>, TexelPart)> {
         let ([u0, v0, u1, v1], [h00, h10, h01, h11]) = self.texel_geometry(x, y);
-        if h00 == h10 && h00 == h01 && h00 == h11 {
-            return intersect_flat_texel(prism, ray, [u0, v0], [u1, v1], h00, t_min, t_max)
-                .map(|hit| (hit, TexelPart::Flat));
-        }
-        let p = |u: T, v: T, h: T| T::Vec3::new(u, v, h);
-        let lower = [p(u0, v0, h00), p(u1, v0, h10), p(u1, v1, h11)];
-        let upper = [p(u0, v0, h00), p(u1, v1, h11), p(u0, v1, h01)];
-        // Both normals have n_h > 0 (counter-clockwise in uv), so the cubics' signs compare.
-        let (Some(plane_l), Some(plane_u)) =
-            (TexturePlane::through(&lower), TexturePlane::through(&upper))
-        else {
+        let flat = h00 == h10 && h00 == h01 && h00 == h11;
+        let (part_l, part_u) = if flat {
+            (TexelPart::Flat, TexelPart::Flat)
+        } else {
+            (TexelPart::Lower, TexelPart::Upper)
+        };
+        let (Some(plane_l), Some(plane_u)) = (
+            self.texel_plane(x, y, part_l),
+            self.texel_plane(x, y, part_u),
+        ) else {
             return None;
         };
         let (cubic_l, cubic_u) = (plane_l.ray_cubic(ray), plane_u.ray_cubic(ray));
         let (abh_l, abh_u) = (plane_l.canonical(prism), plane_u.canonical(prism));
         let h_lo = h00.min(h10).min(h01).min(h11);
         let h_hi = h00.max(h10).max(h01).max(h11);
-        // Diagonal side function times D: (u - u0) - (v - v0) = 0 on the diagonal.
+        // Edge lines times D: faces u = u0, u1, v = v0, v1 and the diagonal u - v = u0 - v0.
+        let line = |a: &[T; 3], face: T| -> [T; 3] {
+            core::array::from_fn(|i| (-face).mul_add(ray.d[i], a[i]))
+        };
         let c = u0 - v0;
-        let diagonal: [T; 3] =
-            core::array::from_fn(|i| (-c).mul_add(ray.d[i], ray.u[i] - ray.v[i]));
-        let mut splits = [T::ZERO; 6];
+        let u_minus_v: [T; 3] = core::array::from_fn(|i| ray.u[i] - ray.v[i]);
+        let diagonal = line(&u_minus_v, c);
+        // Split points, each tagged with the edge it lies on (0-3 faces, 4 diagonal, 5 other).
+        let mut splits = [(T::ZERO, 5u8); 16];
         let mut n = 0;
         for s in [h_lo, h_hi] {
-            splits[n] = s;
+            splits[n] = (s, 5);
             n += 1;
         }
-        let diagonal_roots = solve_quadratic_in(diagonal, h_lo, h_hi);
-        for &r in diagonal_roots.iter().chain(solve_quadratic_in(ray.d, h_lo, h_hi).iter()) {
-            splits[n] = r;
+        let faces = [(&ray.u, u0), (&ray.u, u1), (&ray.v, v0), (&ray.v, v1)];
+        for (edge, (num, face)) in faces.into_iter().enumerate() {
+            for &r in solve_quadratic_in(line(num, face), h_lo, h_hi).iter() {
+                splits[n] = (r, edge as u8);
+                n += 1;
+            }
+        }
+        for &r in solve_quadratic_in(diagonal, h_lo, h_hi).iter() {
+            splits[n] = (r, 4);
+            n += 1;
+        }
+        for &r in solve_quadratic_in(ray.d, h_lo, h_hi).iter() {
+            splits[n] = (r, 5);
             n += 1;
         }
         let splits = &mut splits[..n];
-        splits.sort_unstable_by(|a, b| a.partial_cmp(b).unwrap_or(core::cmp::Ordering::Equal));
+        splits.sort_unstable_by(|a, b| a.0.partial_cmp(&b.0).unwrap_or(core::cmp::Ordering::Equal));
 
         let mut best: Option<(Hit<T>, TexelPart)> = None;
         let mut t_max = t_max;
@@ -320,13 +353,9 @@ impl<T: Real> DisplacedSurface<T> {
             if !(alpha >= T::ZERO && beta >= T::ZERO && alpha + beta <= T::ONE) {
                 return;
             }
-            let uv = prism.texture_uv(alpha, beta);
-            let (u, v) = (uv.x(), uv.y());
-            if !(u >= u0 && u <= u1 && v >= v0 && v <= v1) {
-                return;
-            }
             let t = ray.signed_distance(prism, alpha, beta, h);
             if t >= t_min && t <= *t_max {
+                let uv = prism.texture_uv(alpha, beta);
                 *t_max = t;
                 best = Some((
                     Hit {
@@ -334,44 +363,90 @@ impl<T: Real> DisplacedSurface<T> {
                         alpha,
                         beta,
                         h,
-                        u,
-                        v,
+                        u: uv.x(),
+                        v: uv.y(),
                     },
                     part,
                 ));
             }
         };
-        let side_at = |h: T| -> Option<bool> {
+        // Where the piece around `h` lies: None outside the texel, else Some(lower side).
+        let locate = |h: T| -> Option<bool> {
             let d = ray.d[2].mul_add(h, ray.d[1]).mul_add(h, ray.d[0]);
+            if d == T::ZERO {
+                return None;
+            }
+            let u = ray.u[2].mul_add(h, ray.u[1]).mul_add(h, ray.u[0]) / d;
+            let v = ray.v[2].mul_add(h, ray.v[1]).mul_add(h, ray.v[0]) / d;
+            if !(u >= u0 && u <= u1 && v >= v0 && v <= v1) {
+                return None;
+            }
             let f = diagonal[2].mul_add(h, diagonal[1]).mul_add(h, diagonal[0]);
-            (d != T::ZERO).then(|| (f >= T::ZERO) == (d > T::ZERO) || f == T::ZERO)
+            Some((f >= T::ZERO) == (d > T::ZERO) || f == T::ZERO)
         };
+        if flat {
+            // The curve meets the plane h = h00 at one point: a hit when that point is in the
+            // texel (u(h), v(h) are the same numbers in every texel, so neighbours agree).
+            if locate(h00).is_some() {
+                consider(h00, &abh_l, TexelPart::Flat, &mut t_max);
+            }
+            return best;
+        }
+        let side = |lower: bool| {
+            if lower {
+                (&cubic_l, &abh_l, part_l)
+            } else {
+                (&cubic_u, &abh_u, part_u)
+            }
+        };
+        let mut previous: Option<bool> = None; // location of the piece before the split point
         for i in 0..splits.len() {
-            let a = splits[i];
-            if i + 1 < splits.len() && splits[i + 1] > a {
-                let b = splits[i + 1];
-                // Lower triangle side: (u - u0) >= (v - v0).
-                if let Some(lower_side) = side_at((a + b) * T::HALF) {
-                    let (cubic, abh, part) = if lower_side {
-                        (cubic_l, &abh_l, TexelPart::Lower)
-                    } else {
-                        (cubic_u, &abh_u, TexelPart::Upper)
+            let (a, edge) = splits[i];
+            let here = (i + 1 < splits.len() && splits[i + 1].0 > a)
+                .then(|| locate((a + splits[i + 1].0) * T::HALF))
+                .flatten();
+            // The planes on both sides of this split point must agree in sign: on the
+            // diagonal this texel's two, on an outer edge this texel's and the neighbour's
+            // (unless the curve only touches the edge from inside).
+            let inside_next_to_split = previous.is_some() || here.is_some();
+            let pair = match edge {
+                _ if i == 0 || !inside_next_to_split => None,
+                4 => Some((&cubic_l, &abh_l, part_l, Some(cubic_u))),
+                0..=3 if previous.is_none() || here.is_none() => {
+                    let (own_cubic, own_abh, own_part) = side(here.or(previous).unwrap_or(true));
+                    let (nx, ny, part) = match edge {
+                        0 => (x - 1, y, TexelPart::Lower),
+                        1 => (x + 1, y, TexelPart::Upper),
+                        2 => (x, y - 1, TexelPart::Upper),
+                        _ => (x, y + 1, TexelPart::Lower),
                     };
-                    for &r in solve_cubic_in(cubic, a, b).iter() {
-                        consider(r, abh, part, &mut t_max);
-                    }
+                    let (_, hs) = self.texel_geometry(nx, ny);
+                    let part = if hs[0] == hs[1] && hs[0] == hs[2] && hs[0] == hs[3] {
+                        TexelPart::Flat
+                    } else {
+                        part
+                    };
+                    let other = self.texel_plane(nx, ny, part).map(|p| p.ray_cubic(ray));
+                    Some((own_cubic, own_abh, own_part, other))
+                }
+                _ => None,
+            };
+            if let Some((own_cubic, own_abh, own_part, Some(other))) = pair {
+                let (vo, bo) = horner_with_bound_scaled(own_cubic, a);
+                let (vn, bn) = horner_with_bound_scaled(&other, a);
+                let certain_same = (vo > bo && vn > bn) || (vo < -bo && vn < -bn);
+                if !certain_same {
+                    consider(a, own_abh, own_part, &mut t_max);
                 }
             }
-        }
-        // At the diagonal crossings the two planes must agree in sign; where they do not (or
-        // either sign is within rounding of zero) the surface is crossed right there.
-        for &s in diagonal_roots.iter() {
-            let (vl, bl) = horner_with_bound_scaled(&cubic_l, s);
-            let (vu, bu) = horner_with_bound_scaled(&cubic_u, s);
-            let certain_same = (vl > bl && vu > bu) || (vl < -bl && vu < -bu);
-            if !certain_same {
-                consider(s, &abh_l, TexelPart::Lower, &mut t_max);
+            if let Some(lower) = here {
+                let b = splits[i + 1].0;
+                let (cubic, abh, part) = side(lower);
+                for &r in solve_cubic_in(*cubic, a, b).iter() {
+                    consider(r, abh, part, &mut t_max);
+                }
             }
+            previous = here;
         }
         best
     }
