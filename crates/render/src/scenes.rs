@@ -86,6 +86,10 @@ impl Camera {
 /// mapping (scales, cornell). `torus` is the watertightness scene of the paper's Fig. 8.
 pub const SCENE_NAMES: [&str; 6] = ["mountain", "cylinder", "fur", "torus", "scales", "cornell"];
 
+/// Scenes `nlrt watertight` measures by default (displacement scenes whose rays can be
+/// decided: closed meshes, or the mountain's convex shell).
+pub const WATERTIGHT_SCENES: [&str; 4] = ["torus", "fur", "mountain", "mountain-grazing"];
+
 /// Sizes of a built-in scene: the paper's, or reduced for quick runs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Size {
@@ -104,6 +108,15 @@ pub fn builtin(name: &str, size: Size) -> Option<Scene> {
         "cylinder" => Some(cylinder(if big { 4096 } else { 1024 })),
         "fur" => Some(fur(if big { 256 } else { 64 })),
         "torus" => Some(torus_scene(if big { 1024 } else { 256 })),
+        "mountain-grazing" => {
+            // The watertightness view of the mountain: just above the shell's top, over the
+            // map's edge, looking across it about 4 degrees down.
+            let mut m = mountain(if big { 4096 } else { 1024 });
+            m.name = "mountain-grazing";
+            m.camera.eye = DVec3::new(0.0, 0.4, 0.95);
+            m.camera.target = DVec3::new(0.0, 0.25, -1.0);
+            Some(m)
+        }
         "scales" => Some(scales()),
         "cornell" => Some(cornell(if big { 15 } else { 6 })),
         _ => None,
