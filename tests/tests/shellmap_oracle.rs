@@ -156,3 +156,115 @@ fn f32_disagreement_rates() {
         );
     }
 }
+
+/// The well-shaped prism of [`check`] (normals tilted by at most 0.1 x sqrt 2).
+fn gentle_prism<T: Real>(r: &[f64; 12]) -> Prism<T> {
+    let v = |x: f64, y: f64, z: f64| T::Vec3::new(T::from_f64(x), T::from_f64(y), T::from_f64(z));
+    let w = |x: f64, y: f64| T::Vec2::new(T::from_f64(x), T::from_f64(y));
+    Prism::new(
+        [
+            v(0.1 * r[0], 0.1 * r[1], 0.0),
+            v(1.0, 0.1 * r[2], 0.1 * r[3]),
+            v(0.1 * r[4], 1.0, 0.1 * r[5]),
+        ],
+        [
+            v(0.1 * r[6], 0.1 * r[7], 1.0),
+            v(0.1 * r[8], 0.1 * r[9], 1.0),
+            v(0.1 * r[10], 0.1 * r[11], 1.0),
+        ],
+        [w(0.0, 0.0), w(1.0, 0.0), w(0.0, 1.0)],
+    )
+}
+
+/// World -> canonical (Eq. 4) against the oracle's exact cubic. The largest f64 error over
+/// the cases, and for f32 the same measured: the returned figures are printed by the test.
+/// Tolerance: `TOL_ULPS` ulps of the type (on O(1) coordinates): the Eq. 4 cubic's
+/// coefficients are sums of triple products of O(1) values (a few dozen roundings), and on
+/// these unfolded prisms its root has a slope |p'(h)| of order the prism's volume (>= 0.3),
+/// so the error stays within a few hundred u; 4096 leaves a factor of 10 over that.
+const TOL_ULPS: f64 = 4096.0;
+
+fn mapping_error<T: Real>(r: &[f64; 12], q: [f64; 3]) -> f64 {
+    let prism = gentle_prism::<T>(r);
+    let (alpha, beta, h) = (q[0], q[1] * (1.0 - q[0]), q[2]);
+    let x = prism.shell_point(T::from_f64(alpha), T::from_f64(beta), T::from_f64(h));
+    let truth = nlrt_oracle::shell::true_world_to_canonical(
+        prism.p.map(v3::<T>),
+        prism.n.map(v3::<T>),
+        v3::<T>(x),
+        0.0,
+        1.0,
+    );
+    let inside: Vec<_> = truth
+        .iter()
+        .filter(|c| c[0] >= -1e-9 && c[1] >= -1e-9 && c[0] + c[1] <= 1.0 + 1e-9)
+        .collect();
+    assert_eq!(
+        inside.len(),
+        1,
+        "an unfolded prism covers the point once: {truth:?}"
+    );
+    let c = prism
+        .world_to_canonical(x, T::ZERO, T::ONE)
+        .expect("the point is in the prism");
+    let t = inside[0];
+    (c.alpha.to_f64() - t[0])
+        .abs()
+        .max((c.beta.to_f64() - t[1]).abs())
+        .max((c.h.to_f64() - t[2]).abs())
+}
+
+/// The nonlinear ray's texture coordinates at a height (Eq. 8) against the oracle, relative
+/// to the conditioning of Eq. 5 there (`relative_det`: how far from parallel to the
+/// cross-section the ray is); returns the error scaled by that conditioning.
+fn nonlinear_uv_error<T: Real>(r: &[f64; 12], o: [f64; 3], aim: [f64; 2], h: f64) -> Option<f64> {
+    let prism = gentle_prism::<T>(r);
+    let v = |x: f64, y: f64, z: f64| T::Vec3::new(T::from_f64(x), T::from_f64(y), T::from_f64(z));
+    let target = prism.shell_point(T::from_f64(aim[0]), T::from_f64(aim[1]), T::from_f64(0.5));
+    let origin = v(o[0] * 2.0, o[1] * 2.0, 1.0 + 3.0 * o[2].abs());
+    let ray = Ray::new(origin, target - origin)?;
+    let nl = NonlinearRay::new(&prism, &ray);
+    let (u, w) = nl.uv(T::from_f64(h))?;
+    let scene = ShellScene {
+        p: prism.p.map(v3::<T>),
+        n: prism.n.map(v3::<T>),
+        uv: prism.uv.map(|t| [t.x().to_f64(), t.y().to_f64()]),
+        origin: v3::<T>(ray.origin),
+        dir: v3::<T>(ray.dir),
+        tri: [[0.0; 3]; 3],
+    };
+    let (tu, tv, relative_det) = nlrt_oracle::shell::true_nonlinear_uv(&scene, h)?;
+    // Eq. 5 at this h is a 3x3 system; its solution's error scales with 1 / relative_det.
+    Some((u.to_f64() - tu).abs().max((w.to_f64() - tv).abs()) * relative_det)
+}
+
+proptest! {
+    #![proptest_config(config())]
+
+    #[test]
+    fn world_to_canonical_matches_the_oracle(
+        r in prop::array::uniform12(-1.0f64..1.0),
+        q in prop::array::uniform3(0.0f64..1.0),
+    ) {
+        let u64_ = f64::UNIT_ROUNDOFF;
+        let err = mapping_error::<f64>(&r, q);
+        prop_assert!(err <= TOL_ULPS * u64_, "f64 error {err:e}");
+        let err32 = mapping_error::<f32>(&r, q);
+        prop_assert!(err32 <= TOL_ULPS * f64::from(f32::UNIT_ROUNDOFF), "f32 error {err32:e}");
+    }
+
+    #[test]
+    fn nonlinear_ray_uv_matches_the_oracle(
+        r in prop::array::uniform12(-1.0f64..1.0),
+        o in prop::array::uniform3(-1.0f64..1.0),
+        aim in prop::array::uniform2(0.05f64..0.45),
+        h in 0.0f64..1.0,
+    ) {
+        if let Some(err) = nonlinear_uv_error::<f64>(&r, o, aim, h) {
+            prop_assert!(err <= TOL_ULPS * f64::UNIT_ROUNDOFF, "f64 scaled error {err:e}");
+        }
+        if let Some(err) = nonlinear_uv_error::<f32>(&r, o, aim, h) {
+            prop_assert!(err <= TOL_ULPS * f64::from(f32::UNIT_ROUNDOFF), "f32 scaled error {err:e}");
+        }
+    }
+}

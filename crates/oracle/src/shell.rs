@@ -258,3 +258,99 @@ mod tests {
         );
     }
 }
+
+/// True canonical coordinates of a world point (the inverse of Eq. 1 through the cubic of
+/// Eq. 4, solved exactly), one per height in `[h_lo, h_hi]` where the shell covers the
+/// point (several where it folds). Each is `(alpha, beta, h)` rounded to f64.
+#[must_use]
+pub fn true_world_to_canonical(
+    p: [[f64; 3]; 3],
+    n: [[f64; 3]; 3],
+    x: [f64; 3],
+    h_lo: f64,
+    h_hi: f64,
+) -> Vec<[f64; 3]> {
+    let p = p.map(V3::from);
+    let n = n.map(V3::from);
+    let x = V3::from(x);
+    let (a0, a1) = (p[1].sub(&p[0]), n[1].sub(&n[0]));
+    let (b0, b1) = (p[2].sub(&p[0]), n[2].sub(&n[0]));
+    // N(h) = E0(h) x E1(h) = c0 + c1 h + c2 h^2; (x - S0(h)) . N(h) = 0 with x - S0 = d0 + d1 h.
+    let c0 = a0.cross(&b0);
+    let c1 = a0.cross(&b1).add(&a1.cross(&b0));
+    let c2 = a1.cross(&b1);
+    let d0 = x.sub(&p[0]);
+    let d1 = n[0].scale(&Float::with_val(PREC, -1));
+    let cubic = [
+        d0.dot(&c0),
+        Float::with_val(PREC, d0.dot(&c1) + d1.dot(&c0)),
+        Float::with_val(PREC, d0.dot(&c2) + d1.dot(&c1)),
+        d1.dot(&c2),
+    ];
+    let exact = ExactPoly::from_rationals(
+        cubic
+            .iter()
+            .map(|c| c.to_rational().expect("finite"))
+            .collect::<Vec<Rational>>(),
+    );
+    let mut out = Vec::new();
+    for root in exact.real_roots() {
+        let h = Float::with_val(PREC, &root.value);
+        if h < h_lo || h > h_hi {
+            continue;
+        }
+        let s0 = p[0].add(&n[0].scale(&h));
+        let e0 = a0.add(&a1.scale(&h));
+        let e1 = b0.add(&b1.scale(&h));
+        let normal = e0.cross(&e1);
+        let nn = normal.dot(&normal);
+        if nn.is_zero() {
+            continue;
+        }
+        let r = x.sub(&s0);
+        let alpha = Float::with_val(PREC, r.cross(&e1).dot(&normal) / &nn);
+        let beta = Float::with_val(PREC, e0.cross(&r).dot(&normal) / &nn);
+        out.push([alpha.to_f64(), beta.to_f64(), h.to_f64()]);
+    }
+    out
+}
+
+/// True texture coordinates `(u, v)` of the nonlinear ray of `scene` at height `h` (Eq. 8 at
+/// 512 bits), with the denominator `D(h)` relative to its terms' size (how close the ray is to
+/// parallel to the cross-section there); `None` where `D(h) = 0`.
+#[must_use]
+pub fn true_nonlinear_uv(scene: &ShellScene, h: f64) -> Option<(f64, f64, f64)> {
+    let p = scene.p.map(V3::from);
+    let n = scene.n.map(V3::from);
+    let o = V3::from(scene.origin);
+    let w = V3::from(scene.dir);
+    // Cramer on Eq. 5 directly at this h: o + t w = S0(h) + alpha E0(h) + beta E1(h).
+    let h = Float::with_val(PREC, h);
+    let s0 = p[0].add(&n[0].scale(&h));
+    let e0 = p[1].sub(&p[0]).add(&n[1].sub(&n[0]).scale(&h));
+    let e1 = p[2].sub(&p[0]).add(&n[2].sub(&n[0]).scale(&h));
+    let r = o.sub(&s0);
+    // alpha E0 + beta E1 - t w = r: det [E0 E1 -w].
+    let neg_w = w.scale(&Float::with_val(PREC, -1));
+    let det = e0.cross(&e1).dot(&neg_w);
+    if det.is_zero() {
+        return None;
+    }
+    let size = Float::with_val(
+        PREC,
+        e0.dot(&e0).sqrt() * e1.dot(&e1).sqrt() * w.dot(&w).sqrt(),
+    );
+    let alpha = Float::with_val(PREC, r.cross(&e1).dot(&neg_w) / &det);
+    let beta = Float::with_val(PREC, e0.cross(&r).dot(&neg_w) / &det);
+    let uv = scene.uv.map(|x| x.map(|v| Float::with_val(PREC, v)));
+    let at = |k: usize| {
+        Float::with_val(
+            PREC,
+            &uv[0][k]
+                + Float::with_val(PREC, &alpha * Float::with_val(PREC, &uv[1][k] - &uv[0][k]))
+                + Float::with_val(PREC, &beta * Float::with_val(PREC, &uv[2][k] - &uv[0][k])),
+        )
+    };
+    let relative_det = (Float::with_val(PREC, det.abs_ref()) / &size).to_f64();
+    Some((at(0).to_f64(), at(1).to_f64(), relative_det))
+}

@@ -350,10 +350,15 @@ fn main() -> ExitCode {
             scene_size,
             output,
         } => {
-            if !(SCENE_NAMES.contains(&scene.as_str()) || scenes::WATERTIGHT_SCENES.contains(&scene.as_str())) {
+            if !(SCENE_NAMES.contains(&scene.as_str())
+                || scenes::WATERTIGHT_SCENES.contains(&scene.as_str()))
+            {
                 return fail(
                     "watertight",
-                    format!("unknown scene '{scene}' (scenes: {})", scenes::WATERTIGHT_SCENES.join(", ")),
+                    format!(
+                        "unknown scene '{scene}' (scenes: {})",
+                        scenes::WATERTIGHT_SCENES.join(", ")
+                    ),
                 );
             }
             let Some(built) = scenes::builtin(&scene, scene_size.into()) else {

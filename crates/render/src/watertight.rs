@@ -74,7 +74,11 @@ impl LeakReport {
         let den = 1.0 + z * z / n;
         let centre = (p + z * z / (2.0 * n)) / den;
         let half = z * ((p * (1.0 - p) / n) + z * z / (4.0 * n * n)).sqrt() / den;
-        let lo = if self.leaks == 0 { 0.0 } else { (centre - half).max(0.0) };
+        let lo = if self.leaks == 0 {
+            0.0
+        } else {
+            (centre - half).max(0.0)
+        };
         (lo, (centre + half).min(1.0))
     }
 }

@@ -148,8 +148,15 @@ fn render_writes_a_png() {
 fn torus_is_watertight() {
     use nlrt_render::watertight::measure;
     let scene = scenes::torus_scene(64);
-    for report in [measure::<f64>(&scene, 256).unwrap(), measure::<f32>(&scene, 256).unwrap()] {
-        assert!(report.decided > 20_000, "most rays should be decided: {}", report.decided);
+    for report in [
+        measure::<f64>(&scene, 256).unwrap(),
+        measure::<f32>(&scene, 256).unwrap(),
+    ] {
+        assert!(
+            report.decided > 20_000,
+            "most rays should be decided: {}",
+            report.decided
+        );
         assert_eq!(report.leaks, 0, "{} leaks on the torus", report.precision);
     }
 }
@@ -163,9 +170,20 @@ fn mountain_at_grazing_angles_is_watertight() {
     let mut scene = scenes::mountain(128);
     scene.camera.eye = DVec3::new(0.0, 0.4, 0.95);
     scene.camera.target = DVec3::new(0.0, 0.25, -1.0);
-    for report in [measure::<f64>(&scene, 256).unwrap(), measure::<f32>(&scene, 256).unwrap()] {
-        assert!(report.decided > 5_000, "rays should reach the base: {}", report.decided);
-        assert_eq!(report.leaks, 0, "{} leaks on the mountain", report.precision);
+    for report in [
+        measure::<f64>(&scene, 256).unwrap(),
+        measure::<f32>(&scene, 256).unwrap(),
+    ] {
+        assert!(
+            report.decided > 5_000,
+            "rays should reach the base: {}",
+            report.decided
+        );
+        assert_eq!(
+            report.leaks, 0,
+            "{} leaks on the mountain",
+            report.precision
+        );
     }
 }
 
