@@ -236,29 +236,6 @@ pub fn true_microtriangle_hit(
     best
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn straight_down_onto_a_flat_microtriangle() {
-        let scene = ShellScene {
-            p: [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
-            n: [[0.0, 0.0, 1.0]; 3],
-            uv: [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]],
-            origin: [0.2, 0.2, 3.0],
-            dir: [0.0, 0.0, -1.0],
-            tri: [[0.0, 0.0, 0.25], [1.0, 0.0, 0.75], [0.0, 1.0, 0.25]],
-        };
-        let hit = true_microtriangle_hit(&scene, 0.0, 1.0, 0.0).unwrap();
-        // h = 0.25 + 0.5 u at u = 0.2
-        assert!(
-            (hit.h - 0.35).abs() < 1e-15 && (hit.t - 2.65).abs() < 1e-15,
-            "{hit:?}"
-        );
-    }
-}
-
 /// True canonical coordinates of a world point (the inverse of Eq. 1 through the cubic of
 /// Eq. 4, solved exactly), one per height in `[h_lo, h_hi]` where the shell covers the
 /// point (several where it folds). Each is `(alpha, beta, h)` rounded to f64.
@@ -353,4 +330,27 @@ pub fn true_nonlinear_uv(scene: &ShellScene, h: f64) -> Option<(f64, f64, f64)> 
     };
     let relative_det = (Float::with_val(PREC, det.abs_ref()) / &size).to_f64();
     Some((at(0).to_f64(), at(1).to_f64(), relative_det))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn straight_down_onto_a_flat_microtriangle() {
+        let scene = ShellScene {
+            p: [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+            n: [[0.0, 0.0, 1.0]; 3],
+            uv: [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]],
+            origin: [0.2, 0.2, 3.0],
+            dir: [0.0, 0.0, -1.0],
+            tri: [[0.0, 0.0, 0.25], [1.0, 0.0, 0.75], [0.0, 1.0, 0.25]],
+        };
+        let hit = true_microtriangle_hit(&scene, 0.0, 1.0, 0.0).unwrap();
+        // h = 0.25 + 0.5 u at u = 0.2
+        assert!(
+            (hit.h - 0.35).abs() < 1e-15 && (hit.t - 2.65).abs() < 1e-15,
+            "{hit:?}"
+        );
+    }
 }
