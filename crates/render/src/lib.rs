@@ -9,6 +9,7 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod report;
+pub mod scene_file;
 pub mod scenes;
 pub mod solvers;
 pub mod tessellate;

@@ -92,7 +92,8 @@ impl RenderArgs {
 enum Command {
     /// Render a built-in scene with nonlinear ray tracing to a PNG.
     Render {
-        /// Scene name: mountain, cylinder or fur.
+        /// A built-in scene (mountain, cylinder, fur, torus, scales, cornell) or a scene file
+        /// (`*.toml`, see the README).
         scene: String,
         /// Precision of the intersection.
         #[arg(long, value_enum, default_value = "f32")]
@@ -176,6 +177,15 @@ fn check_scenes(names: &[String]) -> Result<(), String> {
         }
     }
     Ok(())
+}
+
+/// A built-in scene by name, or a scene file (`*.toml`).
+fn resolve_scene(name: &str, size: Size) -> Result<scenes::Scene, String> {
+    if name.ends_with(".toml") {
+        return nlrt_render::scene_file::load(std::path::Path::new(name));
+    }
+    check_scenes(&[name.to_string()])?;
+    scenes::builtin(name, size).ok_or_else(|| format!("unknown scene '{name}'"))
 }
 
 fn report_command(output: PathBuf, args: &RenderArgs, solver_samples: usize) -> ExitCode {
@@ -270,11 +280,9 @@ fn main() -> ExitCode {
             args,
             output,
         } => {
-            if let Err(e) = check_scenes(std::slice::from_ref(&scene)) {
-                return fail("render", e);
-            }
-            let Some(built) = scenes::builtin(&scene, args.scene_size.into()) else {
-                return fail("render", "unknown scene");
+            let built = match resolve_scene(&scene, args.scene_size.into()) {
+                Ok(s) => s,
+                Err(e) => return fail("render", e),
             };
             let method = match precision {
                 Precision::F32 => Method::NonlinearF32,

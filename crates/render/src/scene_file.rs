@@ -1,0 +1,336 @@
+//! Scene files: a TOML file naming an OBJ base mesh (uvs required, normals computed when
+//! absent) and either a PNG height map (displacement mapping) or an OBJ object in the unit
+//! tile (shell mapping), with height scale, tiling, camera and sun. Paths are relative to the
+//! TOML file. Every error names the file (and the line, where the format has one).
+//!
+//! ```toml
+//! [mesh]
+//! obj = "base.obj"
+//! [displacement]
+//! height_map = "height.png"   # grayscale PNG, 8 or 16 bits, square, side a power of two
+//! height_scale = 0.1
+//! tiling = 1.0                # optional, default 1
+//! [camera]
+//! eye = [0.0, 1.0, 3.0]
+//! target = [0.0, 0.0, 0.0]
+//! fov_degrees = 45.0          # optional
+//! sun = [0.3, 0.8, 0.5]       # optional
+//! ```
+//!
+//! For shell mapping, `[shell]` with `object = "object.obj"` (vertices `(x, y, z)` read as
+//! `(u, v, h)` in `[0, 1]^3`), `height_scale` and `tiling` replaces `[displacement]`.
+
+use crate::scenes::{Camera, Content, Scene};
+use nlrt_accel::{HeightField, Wrap};
+use nlrt_poly::glam::{DVec2, DVec3};
+use serde::Deserialize;
+use std::path::{Path, PathBuf};
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct File {
+    mesh: MeshSection,
+    displacement: Option<DisplacementSection>,
+    shell: Option<ShellSection>,
+    camera: CameraSection,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct MeshSection {
+    obj: PathBuf,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct DisplacementSection {
+    height_map: PathBuf,
+    height_scale: f64,
+    #[serde(default = "one")]
+    tiling: f64,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ShellSection {
+    object: PathBuf,
+    height_scale: f64,
+    #[serde(default = "one")]
+    tiling: f64,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CameraSection {
+    eye: [f64; 3],
+    target: [f64; 3],
+    #[serde(default = "default_fov")]
+    fov_degrees: f64,
+    #[serde(default = "default_sun")]
+    sun: [f64; 3],
+}
+
+fn one() -> f64 {
+    1.0
+}
+fn default_fov() -> f64 {
+    45.0
+}
+fn default_sun() -> [f64; 3] {
+    [0.3, 0.8, 0.5]
+}
+
+/// Loads a scene file.
+///
+/// # Errors
+/// A message naming the file (and line) for: an unreadable file, TOML syntax, an unknown key,
+/// a bad value, a missing section; a malformed OBJ, an OBJ without texture coordinates, NaN or
+/// infinite vertices, triangles degenerate in both world and uv space; a height map that is
+/// not a grayscale 8/16-bit PNG or not square with a power-of-two side; an object outside the
+/// unit tile.
+pub fn load(path: &Path) -> Result<Scene, String> {
+    let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let file: File = toml::from_str(&text).map_err(|e| {
+        let line = e
+            .span()
+            .map(|s| format!(" line {}", text[..s.start].matches('\n').count() + 1))
+            .unwrap_or_default();
+        format!("{}{line}: {}", path.display(), e.message())
+    })?;
+    let dir = path.parent().unwrap_or(Path::new("."));
+    let (positions, normals, uvs, triangles) = load_obj(&dir.join(&file.mesh.obj), true)?;
+    let check = |what: &str, v: f64, ok: bool| {
+        if ok {
+            Ok(())
+        } else {
+            Err(format!("{}: {what} = {v} is out of range", path.display()))
+        }
+    };
+    let (content, height_scale, tiling) = match (&file.displacement, &file.shell) {
+        (Some(d), None) => {
+            check(
+                "height_scale",
+                d.height_scale,
+                d.height_scale.is_finite() && d.height_scale > 0.0,
+            )?;
+            check(
+                "tiling",
+                d.tiling,
+                d.tiling.is_finite() && d.tiling > 0.0 && d.tiling <= 1e6,
+            )?;
+            let field = load_height_map(&dir.join(&d.height_map))?;
+            (Content::Displacement(field), d.height_scale, d.tiling)
+        }
+        (None, Some(s)) => {
+            check(
+                "height_scale",
+                s.height_scale,
+                s.height_scale.is_finite() && s.height_scale > 0.0,
+            )?;
+            check(
+                "tiling",
+                s.tiling,
+                s.tiling.is_finite() && s.tiling > 0.0 && s.tiling <= 1e6,
+            )?;
+            let object_path = dir.join(&s.object);
+            let (p, _, _, t) = load_obj(&object_path, false)?;
+            let object: Vec<[DVec3; 3]> = t.iter().map(|t| t.map(|i| p[i as usize])).collect();
+            if let Some(bad) = object
+                .iter()
+                .flatten()
+                .find(|v| !(v.min_element() >= 0.0 && v.max_element() <= 1.0))
+            {
+                return Err(format!(
+                    "{}: object vertex {bad} is outside the unit tile [0, 1]^3 (objects are given as (u, v, h))",
+                    object_path.display()
+                ));
+            }
+            (Content::Shell(object), s.height_scale, s.tiling)
+        }
+        _ => {
+            return Err(format!(
+                "{}: exactly one of [displacement] and [shell] is required",
+                path.display()
+            ));
+        }
+    };
+    let c = &file.camera;
+    let finite = |v: [f64; 3]| v.iter().all(|x| x.is_finite());
+    if !(finite(c.eye)
+        && finite(c.target)
+        && finite(c.sun)
+        && DVec3::from(c.eye) != DVec3::from(c.target))
+    {
+        return Err(format!(
+            "{}: camera eye, target and sun must be finite, eye != target",
+            path.display()
+        ));
+    }
+    check(
+        "fov_degrees",
+        c.fov_degrees,
+        c.fov_degrees > 0.0 && c.fov_degrees < 180.0,
+    )?;
+    let sun = DVec3::from(c.sun).normalize_or_zero();
+    if sun == DVec3::ZERO {
+        return Err(format!("{}: sun direction is zero", path.display()));
+    }
+    Ok(Scene {
+        name: "file",
+        positions,
+        normals,
+        uvs,
+        triangles,
+        content,
+        height_scale,
+        tiling,
+        camera: Camera {
+            eye: DVec3::from(c.eye),
+            target: DVec3::from(c.target),
+            fov_degrees: c.fov_degrees,
+        },
+        sun,
+    })
+}
+
+type ObjData = (Vec<DVec3>, Vec<DVec3>, Vec<DVec2>, Vec<[u32; 3]>);
+
+/// An OBJ as one mesh (all models merged). With `base`, texture coordinates are required and
+/// normals computed (area-weighted) when absent.
+fn load_obj(path: &Path, base: bool) -> Result<ObjData, String> {
+    let options = tobj::LoadOptions {
+        triangulate: true,
+        single_index: true,
+        ..Default::default()
+    };
+    let (models, _) =
+        tobj::load_obj(path, &options).map_err(|e| format!("{}: {e}", path.display()))?;
+    let (mut p, mut n, mut uv, mut t) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    for m in &models {
+        let mesh = &m.mesh;
+        let base_index = p.len() as u32;
+        let count = mesh.positions.len() / 3;
+        if base && mesh.texcoords.len() != 2 * count {
+            return Err(format!(
+                "{}: model '{}' has no texture coordinates (vt); a base mesh needs uvs",
+                path.display(),
+                m.name
+            ));
+        }
+        for i in 0..count {
+            let v = DVec3::new(
+                f64::from(mesh.positions[3 * i]),
+                f64::from(mesh.positions[3 * i + 1]),
+                f64::from(mesh.positions[3 * i + 2]),
+            );
+            if !v.is_finite() {
+                return Err(format!(
+                    "{}: vertex {} is NaN or infinite",
+                    path.display(),
+                    p.len() + 1
+                ));
+            }
+            p.push(v);
+            if base {
+                uv.push(DVec2::new(
+                    f64::from(mesh.texcoords[2 * i]),
+                    f64::from(mesh.texcoords[2 * i + 1]),
+                ));
+            }
+            if mesh.normals.len() == 3 * count {
+                n.push(DVec3::new(
+                    f64::from(mesh.normals[3 * i]),
+                    f64::from(mesh.normals[3 * i + 1]),
+                    f64::from(mesh.normals[3 * i + 2]),
+                ));
+            }
+        }
+        for tri in mesh.indices.chunks_exact(3) {
+            t.push([
+                tri[0] + base_index,
+                tri[1] + base_index,
+                tri[2] + base_index,
+            ]);
+        }
+    }
+    if t.is_empty() {
+        return Err(format!("{}: no triangles", path.display()));
+    }
+    if base {
+        for (k, tri) in t.iter().enumerate() {
+            let [a, b, c] = tri.map(|i| i as usize);
+            let world = (p[b] - p[a]).cross(p[c] - p[a]).length_squared();
+            let tex = (uv[b] - uv[a]).perp_dot(uv[c] - uv[a]);
+            if world == 0.0 && tex == 0.0 {
+                return Err(format!(
+                    "{}: triangle {} has zero area in both world and uv space",
+                    path.display(),
+                    k + 1
+                ));
+            }
+        }
+        if n.len() != p.len() {
+            n = vec![DVec3::ZERO; p.len()];
+            for tri in &t {
+                let [a, b, c] = tri.map(|i| i as usize);
+                let face = (p[b] - p[a]).cross(p[c] - p[a]);
+                for v in [a, b, c] {
+                    n[v] += face;
+                }
+            }
+        }
+        for v in &mut n {
+            *v = v.normalize_or_zero();
+        }
+    }
+    Ok((p, n, uv, t))
+}
+
+/// A grayscale PNG (8 or 16 bits) as a height field.
+fn load_height_map(path: &Path) -> Result<HeightField, String> {
+    let err = |m: String| format!("{}: {m}", path.display());
+    let file = std::fs::File::open(path).map_err(|e| err(e.to_string()))?;
+    let mut decoder = png::Decoder::new(std::io::BufReader::new(file));
+    decoder.set_transformations(png::Transformations::IDENTITY);
+    let mut reader = decoder
+        .read_info()
+        .map_err(|e| err(format!("not a readable PNG: {e}")))?;
+    let mut buf = vec![
+        0;
+        reader
+            .output_buffer_size()
+            .ok_or_else(|| err("image too large".into()))?
+    ];
+    let info = reader
+        .next_frame(&mut buf)
+        .map_err(|e| err(format!("not a readable PNG: {e}")))?;
+    let (w, h) = (info.width as usize, info.height as usize);
+    let channels = match info.color_type {
+        png::ColorType::Grayscale => 1,
+        png::ColorType::GrayscaleAlpha => 2,
+        other => {
+            return Err(err(format!(
+                "height maps must be grayscale PNGs (8 or 16 bits); this one is {other:?}"
+            )));
+        }
+    };
+    let samples: Vec<u16> = match info.bit_depth {
+        png::BitDepth::Eight => buf[..w * h * channels]
+            .chunks_exact(channels)
+            .map(|c| u16::from(c[0]) * 257)
+            .collect(),
+        png::BitDepth::Sixteen => buf[..w * h * channels * 2]
+            .chunks_exact(2 * channels)
+            .map(|c| u16::from_be_bytes([c[0], c[1]]))
+            .collect(),
+        other => {
+            return Err(err(format!(
+                "height maps must have 8 or 16 bits per sample; this one has {other:?}"
+            )));
+        }
+    };
+    if w != h {
+        return Err(err(format!("height map is {w} x {h}; it must be square")));
+    }
+    HeightField::new(w, samples, Wrap::Repeat).map_err(|e| err(e.to_string()))
+}
