@@ -320,7 +320,7 @@ impl<T: Real> DisplacedSurface<T> {
         let u_minus_v: [T; 3] = core::array::from_fn(|i| ray.u[i] - ray.v[i]);
         let diagonal = line(&u_minus_v, c);
         // Split points, each tagged with the edge it lies on (0-3 faces, 4 diagonal, 5 other).
-        let mut splits = [(T::ZERO, 5u8); 16];
+        let mut splits = [(T::ZERO, 5u8); 24];
         let mut n = 0;
         for s in [h_lo, h_hi] {
             splits[n] = (s, 5);
@@ -341,6 +341,16 @@ impl<T: Real> DisplacedSurface<T> {
             splits[n] = (r, 5);
             n += 1;
         }
+        // The base triangle's edges: alpha = 0, beta = 0, alpha + beta = 1 (times D).
+        let alpha_plus_beta_minus_one: [T; 3] =
+            core::array::from_fn(|i| ray.alpha[i] + ray.beta[i] - ray.d[i]);
+        let base_edges = [ray.alpha, ray.beta, alpha_plus_beta_minus_one];
+        for (k, q) in base_edges.iter().enumerate() {
+            for &r in solve_quadratic_in(*q, h_lo, h_hi).iter() {
+                splits[n] = (r, 6 + k as u8);
+                n += 1;
+            }
+        }
         let splits = &mut splits[..n];
         splits.sort_unstable_by(|a, b| a.0.partial_cmp(&b.0).unwrap_or(core::cmp::Ordering::Equal));
 
@@ -350,9 +360,18 @@ impl<T: Real> DisplacedSurface<T> {
             let Some((alpha, beta)) = alpha_beta_eq11(ray, abh, h) else {
                 return;
             };
-            if !(alpha >= T::ZERO && beta >= T::ZERO && alpha + beta <= T::ONE) {
+            if !(alpha.is_finite() && beta.is_finite()) {
                 return;
             }
+            // The pieces decide inside-ness; Eq. 11 may put a point on an edge a rounding
+            // error outside, so clamp it onto the base triangle.
+            let (alpha, beta) = (alpha.max(T::ZERO), beta.max(T::ZERO));
+            let sum = alpha + beta;
+            let (alpha, beta) = if sum > T::ONE {
+                (alpha / sum, beta / sum)
+            } else {
+                (alpha, beta)
+            };
             let t = ray.signed_distance(prism, alpha, beta, h);
             if t >= t_min && t <= *t_max {
                 let uv = prism.texture_uv(alpha, beta);
@@ -381,17 +400,18 @@ impl<T: Real> DisplacedSurface<T> {
             if !(u >= u0 && u <= u1 && v >= v0 && v <= v1) {
                 return None;
             }
+            // Inside the base triangle: each edge function (times D) has the sign of D, the
+            // third reversed.
+            let at = |q: &[T; 3]| q[2].mul_add(h, q[1]).mul_add(h, q[0]);
+            let positive = d > T::ZERO;
+            let (a, b, c) = (at(&base_edges[0]), at(&base_edges[1]), at(&base_edges[2]));
+            let same = |x: T| x == T::ZERO || (x > T::ZERO) == positive;
+            if !(same(a) && same(b) && same(-c)) {
+                return None;
+            }
             let f = diagonal[2].mul_add(h, diagonal[1]).mul_add(h, diagonal[0]);
             Some((f >= T::ZERO) == (d > T::ZERO) || f == T::ZERO)
         };
-        if flat {
-            // The curve meets the plane h = h00 at one point: a hit when that point is in the
-            // texel (u(h), v(h) are the same numbers in every texel, so neighbours agree).
-            if locate(h00).is_some() {
-                consider(h00, &abh_l, TexelPart::Flat, &mut t_max);
-            }
-            return best;
-        }
         let side = |lower: bool| {
             if lower {
                 (&cubic_l, &abh_l, part_l)
@@ -399,6 +419,55 @@ impl<T: Real> DisplacedSurface<T> {
                 (&cubic_u, &abh_u, part_u)
             }
         };
+        // A bound on the error of a base-edge crossing height `s` (a root of one of
+        // `base_edges`): the quadratic's coefficients are differences of products of Eq. 6's
+        // rows (entries at most `row_max`), so each carries an error below gamma(32) row_max^2
+        // (a generous count of roundings); divided by the slope, that moves the root.
+        let row_max = ray
+            .rows
+            .iter()
+            .flatten()
+            .flatten()
+            .fold(T::ZERO, |m, &x| m.max(x.abs()));
+        let g32 =
+            T::from_i32(32) * T::UNIT_ROUNDOFF / (T::ONE - T::from_i32(32) * T::UNIT_ROUNDOFF);
+        let edge_window = |edge: u8, s: T| -> T {
+            let q = &base_edges[usize::from(edge - 6)];
+            let slope = (T::TWO * q[2]).mul_add(s, q[1]).abs();
+            let a = s.abs();
+            let err = g32 * row_max * row_max * (T::ONE + a + a * a);
+            if slope > T::ZERO {
+                err / slope
+            } else {
+                T::INFINITY
+            }
+        };
+        if flat {
+            // The curve meets the plane h = h00 at one point: a hit when that point is in the
+            // texel (u(h), v(h) are the same numbers in every texel, so neighbours agree) and
+            // in the base triangle, where a base edge whose crossing lies within its error
+            // window of h00 counts as passed (as the pieces are extended above).
+            let d = ray.d[2].mul_add(h00, ray.d[1]).mul_add(h00, ray.d[0]);
+            if d != T::ZERO {
+                let u = ray.u[2].mul_add(h00, ray.u[1]).mul_add(h00, ray.u[0]) / d;
+                let v = ray.v[2].mul_add(h00, ray.v[1]).mul_add(h00, ray.v[0]) / d;
+                let in_texel = u >= u0 && u <= u1 && v >= v0 && v <= v1;
+                let positive = d > T::ZERO;
+                let edge_ok = |k: usize| {
+                    let q = &base_edges[k];
+                    let value = q[2].mul_add(h00, q[1]).mul_add(h00, q[0]);
+                    let value = if k == 2 { -value } else { value };
+                    value == T::ZERO || (value > T::ZERO) == positive || {
+                        let w = edge_window(6 + k as u8, h00);
+                        !solve_quadratic_in(*q, h00 - w, h00 + w).is_empty()
+                    }
+                };
+                if in_texel && edge_ok(0) && edge_ok(1) && edge_ok(2) {
+                    consider(h00, &abh_l, TexelPart::Flat, &mut t_max);
+                }
+            }
+            return best;
+        }
         let mut previous: Option<bool> = None; // location of the piece before the split point
         for i in 0..splits.len() {
             let (a, edge) = splits[i];
@@ -440,10 +509,24 @@ impl<T: Real> DisplacedSurface<T> {
                 }
             }
             if let Some(lower) = here {
-                let b = splits[i + 1].0;
+                let (b, edge_b) = splits[i + 1];
                 let (cubic, abh, part) = side(lower);
-                for &r in solve_cubic_in(*cubic, a, b).iter() {
-                    consider(r, abh, part, &mut t_max);
+                // Where the piece ends on a base-triangle edge, the neighbouring prism computes
+                // the same crossing with its own rounding: extend the piece by a bound on this
+                // crossing's error so the two prisms' pieces overlap (no gap to slip through);
+                // a root found in the extension is reported on the edge.
+                let lo = if edge >= 6 {
+                    (a - edge_window(edge, a)).max(h_lo)
+                } else {
+                    a
+                };
+                let hi = if edge_b >= 6 {
+                    (b + edge_window(edge_b, b)).min(h_hi)
+                } else {
+                    b
+                };
+                for &r in solve_cubic_in(*cubic, lo, hi).iter() {
+                    consider(r.max(a).min(b), abh, part, &mut t_max);
                 }
             }
             previous = here;
