@@ -104,7 +104,8 @@ enum Command {
         #[arg(short, long, default_value = "nlrt.png")]
         output: PathBuf,
     },
-    /// Speed, init time and memory per scene and method (no images written).
+    /// Speed, init time, memory and 1-thread vs all-threads scaling per scene and method (no
+    /// images written).
     Bench {
         /// Scenes (default: all built-in).
         scenes: Vec<String>,
@@ -198,6 +199,7 @@ fn report_command(output: PathBuf, args: &RenderArgs, solver_samples: usize) -> 
         render: args.options(),
         methods: Method::ALL.to_vec(),
         out_dir: Some(output.clone()),
+        scaling: false,
     };
     let start = std::time::Instant::now();
     let scenes_md = match report::run(&opts) {
@@ -294,6 +296,7 @@ fn main() -> ExitCode {
                 render: args.options(),
                 methods: vec![method],
                 out_dir: None,
+                scaling: false,
             };
             let runs = report::run_scene(&built, &opts);
             let run = &runs[0];
@@ -337,6 +340,7 @@ fn main() -> ExitCode {
                 render: args.options(),
                 methods,
                 out_dir: None,
+                scaling: true,
             };
             match report::run(&opts) {
                 Ok(md) => {

@@ -73,6 +73,8 @@ pub struct MethodRun {
     pub memory_bytes: usize,
     /// The frame.
     pub frame: Frame,
+    /// Seconds of the same render on one thread (when measured).
+    pub one_thread_seconds: Option<f64>,
 }
 
 impl MethodRun {
@@ -102,16 +104,28 @@ pub struct ReportOptions {
     pub methods: Vec<Method>,
     /// Where images and the report go (`None`: nowhere).
     pub out_dir: Option<PathBuf>,
+    /// Also render on one thread and report the speed-up of all threads over it.
+    pub scaling: bool,
 }
 
+/// A progress bar over image rows on a terminal (indicatif); nothing when stderr is not one.
 fn progress_printer(label: String, rows: usize) -> impl Fn(usize) + Sync {
-    let terminal = std::io::stderr().is_terminal();
+    let bar = if std::io::stderr().is_terminal() {
+        let bar = indicatif::ProgressBar::new(rows as u64);
+        if let Ok(style) = indicatif::ProgressStyle::with_template(
+            "  {prefix:32} [{bar:30}] {pos}/{len} rows, {elapsed}, eta {eta}",
+        ) {
+            bar.set_style(style.progress_chars("=> "));
+        }
+        bar.set_prefix(label);
+        bar
+    } else {
+        indicatif::ProgressBar::hidden()
+    };
     move |done: usize| {
-        if terminal && (done.is_multiple_of(8) || done == rows) {
-            eprint!("\r  {label}: {done}/{rows} rows   ");
-            if done == rows {
-                eprintln!();
-            }
+        bar.set_position(done as u64);
+        if done == rows {
+            bar.finish();
         }
     }
 }
@@ -142,11 +156,18 @@ pub fn run_scene(scene: &Scene, opts: &ReportOptions) -> Vec<MethodRun> {
                 &opts.render,
                 &progress_printer(label, opts.render.height),
             );
+            let one_thread_seconds = opts.scaling.then(|| {
+                let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build();
+                pool.map_or(f64::NAN, |pool| {
+                    pool.install(|| render(scene, tracer.as_ref(), &opts.render, &|_| {}).seconds)
+                })
+            });
             MethodRun {
                 method,
                 init_seconds,
                 memory_bytes: tracer.memory_bytes(),
                 frame,
+                one_thread_seconds,
             }
         })
         .collect()
@@ -216,9 +237,18 @@ pub fn run(opts: &ReportOptions) -> Result<String, String> {
     );
     let _ = writeln!(
         md,
-        "| scene | method | init s | accel MiB | Mrays/s primary | Mrays/s all | miss/hit mismatch vs ref | depth err vs ref median / p99 | mismatch vs nl f64 | depth err vs nl f64 p99 / max |"
+        "| scene | method | init s | accel MiB | Mrays/s primary | Mrays/s all | {}miss/hit mismatch vs ref | depth err vs ref median / p99 | mismatch vs nl f64 | depth err vs nl f64 p99 / max |",
+        if opts.scaling {
+            format!("speed-up {} threads / 1 | ", rayon::current_num_threads())
+        } else {
+            String::new()
+        }
     );
-    let _ = writeln!(md, "|---|---|---|---|---|---|---|---|---|---|");
+    let _ = writeln!(
+        md,
+        "|---|---|---|---|---|---|---|{}---|---|---|",
+        if opts.scaling { "---|" } else { "" }
+    );
     for name in &opts.scenes {
         let Some(scene) = scenes::builtin(name, opts.size) else {
             return Err(format!(
@@ -244,12 +274,16 @@ pub fn run(opts: &ReportOptions) -> Result<String, String> {
             };
             let _ = writeln!(
                 md,
-                "| {name} | {} | {:.3} | {:.1} | {:.3} | {:.3} | {} | {} | {} | {} |",
+                "| {name} | {} | {:.3} | {:.1} | {:.3} | {:.3} | {}{} | {} | {} | {} |",
                 m.method,
                 m.init_seconds,
                 mib(m.memory_bytes),
                 m.primary_mrays(),
                 m.all_mrays(),
+                m.one_thread_seconds.map_or(String::new(), |one| format!(
+                    "{:.2} | ",
+                    one / m.frame.seconds
+                )),
                 fmt_rate(e_ref),
                 e_ref.map_or("-".into(), |e| format!(
                     "{:.1e} / {:.1e}",
