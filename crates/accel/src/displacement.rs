@@ -112,9 +112,14 @@ pub struct DisplacedSurface<T: Real> {
     tlas: Bvh4<T>,
 }
 
-/// Entries of the BLAS stack: a node pushes at most 4 children after popping itself, and
-/// levels are below 64, so `3 * 64 + 4` suffices.
-const BLAS_STACK: usize = 196;
+/// Highest root level: texel coordinates are below 2^22 in magnitude
+/// ([`MAX_TEXEL_COORDINATE`]), so a triangle's texel range spans fewer than 2^23 texels and
+/// fits 2 nodes of level 23.
+const MAX_ROOT_LEVEL: usize = 23;
+/// Entries of the BLAS stack: up to 4 roots, then each popped inner node pushes at most 4
+/// children (3 more than it took), once per level on the way down. Kept small: the array
+/// is initialised per prism test.
+const BLAS_STACK: usize = 4 + 3 * MAX_ROOT_LEVEL;
 
 #[derive(Clone, Copy)]
 struct Pending<T> {
