@@ -83,8 +83,11 @@ impl Camera {
 }
 
 /// Names of the built-in scenes: displacement mapping (mountain, cylinder, fur) and shell
-/// mapping (scales, cornell). `torus` is the watertightness scene of the paper's Fig. 8.
-pub const SCENE_NAMES: [&str; 6] = ["mountain", "cylinder", "fur", "torus", "scales", "cornell"];
+/// mapping (scales, cornell, fig9). `torus` is the watertightness scene of the paper's Fig. 8,
+/// `fig9` its Fig. 9 (degenerate base meshes and prisms).
+pub const SCENE_NAMES: [&str; 7] = [
+    "mountain", "cylinder", "fur", "torus", "scales", "cornell", "fig9",
+];
 
 /// Scenes `nlrt watertight` measures by default (displacement scenes whose rays can be
 /// decided: closed meshes, or the mountain's convex shell).
@@ -118,6 +121,7 @@ pub fn builtin(name: &str, size: Size) -> Option<Scene> {
             Some(m)
         }
         "scales" => Some(scales()),
+        "fig9" => Some(fig9()),
         "cornell" => Some(cornell(if big { 15 } else { 6 })),
         _ => None,
     }
@@ -502,6 +506,96 @@ pub fn torus_scene(side: usize) -> Scene {
         camera: Camera {
             eye: DVec3::new(0.0, 0.9, 2.8),
             target: DVec3::new(0.0, -0.1, 0.0),
+            fov_degrees: 45.0,
+        },
+        sun: DVec3::new(0.3, 0.8, 0.5).normalize(),
+    }
+}
+
+/// Fig. 9: a Cornell-box object instanced once in the shell of a two-triangle rectangle, in
+/// seven columns: (1) regular; (2) one base triangle degenerate to a line in uv, (3) to a
+/// point in uv; (4) normals that make the prisms degenerate to a line at `h = 1`, (5) to a
+/// point; (6) one triangle degenerate to a line in world and uv space (it must disappear);
+/// (7) one triangle degenerate to a line in world space only.
+#[must_use]
+pub fn fig9() -> Scene {
+    let height = 0.5;
+    let (mut positions, mut normals, mut uvs, mut triangles) =
+        (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    for column in 0..7 {
+        let x0 = column as f64 * 1.25 - 3.75;
+        let corner = |x: f64, z: f64| DVec3::new(x0 + x, 0.0, z - 0.5);
+        let mut p = [
+            corner(0.0, 0.0),
+            corner(1.0, 0.0),
+            corner(1.0, 1.0),
+            corner(0.0, 1.0),
+        ];
+        let mut uv = [
+            DVec2::new(0.0, 0.0),
+            DVec2::new(1.0, 0.0),
+            DVec2::new(1.0, 1.0),
+            DVec2::new(0.0, 1.0),
+        ];
+        let mut n = [DVec3::Y; 4];
+        match column {
+            1 => uv[3] = DVec2::new(0.5, 0.5), // triangle (0, 2, 3): a line in uv
+            2 => {
+                // triangle (0, 2, 3): a point in uv (its own vertices)
+                uv = [DVec2::splat(0.5); 4];
+                uv[1] = DVec2::new(1.0, 0.0);
+            }
+            3 => {
+                // S_i(1) on the line x = centre, y = height: the prisms pinch to a line.
+                for i in 0..4 {
+                    n[i] = (DVec3::new(x0 + 0.5, height, p[i].z) - p[i]) / height;
+                }
+            }
+            4 => {
+                // S_i(1) all at one point: the prisms pinch to a point.
+                for i in 0..4 {
+                    n[i] = (DVec3::new(x0 + 0.5, height, 0.0) - p[i]) / height;
+                }
+            }
+            5 => {
+                // Triangle (0, 2, 3) a line in world and uv: vertex 3 on the diagonal.
+                p[3] = corner(0.5, 0.5);
+                uv[3] = DVec2::new(0.5, 0.5);
+            }
+            6 => p[3] = corner(0.5, 0.5), // a line in world only
+            _ => {}
+        }
+        // Column 2's point-degenerate triangle gets its own vertices so the other keeps uvs.
+        let base = positions.len() as u32;
+        positions.extend(p);
+        normals.extend(n);
+        uvs.extend(uv);
+        if column == 2 {
+            positions.extend([p[0], p[1], p[2]]);
+            normals.extend([n[0], n[1], n[2]]);
+            uvs.extend([
+                DVec2::new(0.0, 0.0),
+                DVec2::new(1.0, 0.0),
+                DVec2::new(1.0, 1.0),
+            ]);
+            triangles.push([base + 4, base + 5, base + 6]);
+        } else {
+            triangles.push([base, base + 1, base + 2]);
+        }
+        triangles.push([base, base + 2, base + 3]);
+    }
+    Scene {
+        name: "fig9",
+        positions,
+        normals,
+        uvs,
+        triangles,
+        content: Content::Shell(cornell_object(8)),
+        height_scale: height,
+        tiling: 1.0,
+        camera: Camera {
+            eye: DVec3::new(0.5, 3.0, 3.9),
+            target: DVec3::new(0.5, 0.0, 0.0),
             fov_degrees: 45.0,
         },
         sun: DVec3::new(0.3, 0.8, 0.5).normalize(),

@@ -193,3 +193,29 @@ fn watertight_rejects_shell_scenes_cleanly() {
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("displacement scenes"));
 }
+
+/// Fig. 9's degenerate configurations (uv-degenerate to a line and a point, prisms pinching
+/// to a line and a point, a triangle degenerate in world and uv, one in world only): no
+/// panic, no NaN, and single and double precision agree on hit/miss for all but a handful of
+/// pixels (the paper: "rendered without artifacts with both single and double precision").
+/// Measured: 1 of 7,000 pixels differs; shell-mapped objects are intersected triangle by
+/// triangle, and edges shared between object triangles are not yet made watertight as the
+/// height-field texels are, so a ray through such an edge may hit in one precision only.
+#[test]
+fn fig9_degenerate_columns_render_alike_in_both_precisions() {
+    let scene = scenes::fig9();
+    let opts = RenderOptions {
+        width: 140,
+        height: 50,
+        spp: 1,
+        bounces: 0,
+    };
+    let f32_frame = render(&scene, &Nonlinear::<f32>::new(&scene), &opts, &|_| {});
+    let f64_frame = render(&scene, &Nonlinear::<f64>::new(&scene), &opts, &|_| {});
+    let hits = f64_frame.depth.iter().filter(|d| !d.is_nan()).count();
+    assert!(hits > 500, "the columns should be visible: {hits}");
+    assert!(f32_frame.color.iter().flatten().all(|c| c.is_finite()));
+    let e = compare(&f32_frame, &f64_frame);
+    eprintln!("fig9 f32 vs f64: {e:?}");
+    assert!(e.mismatches <= 3, "{e:?}");
+}
