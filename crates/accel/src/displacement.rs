@@ -1,18 +1,15 @@
 //! Displacement-mapped surfaces: the TLAS over prisms and the implicit min-max mipmap BLAS
 //! traversed by nonlinear rays (Ogaki 2023, sec. 4.4, 5.1, 5.4).
 
-use alloc::vec::Vec;
 use core::fmt;
 use nlrt_poly::{Real, Vector2, Vector3};
 use nlrt_poly::{horner_with_bound_scaled, solve_cubic_in, solve_quadratic_in};
-use nlrt_shellmap::{
-    Hit, NonlinearRay, Prism, Ray, TexturePlane, alpha_beta_eq11, intersect_box, intersect_prism,
-    world_normal,
-};
+use nlrt_shellmap::{Hit, NonlinearRay, Prism, Ray, TexturePlane, alpha_beta_eq11, world_normal};
 
-use crate::bvh::{Aabb, Bvh4, SlabRay};
+use crate::bvh::{Aabb, Bvh4};
+use crate::cells::{PrismTlas, SetupError, traverse_cells};
 use crate::heightfield::{HEIGHT_ONE, HeightField};
-use crate::mesh::{BaseMesh, prism_bounds};
+use crate::mesh::BaseMesh;
 
 /// Texel coordinates beyond this (in one axis, after tiling) are rejected: they keep every
 /// texel corner exactly representable in `f32` (24-bit significand) with room to spare.
@@ -103,30 +100,9 @@ pub struct TraversalStats {
 /// TLAS over its prisms and the per-triangle roots into the height field's pyramid.
 #[derive(Clone, Debug)]
 pub struct DisplacedSurface<T: Real> {
-    mesh: BaseMesh<T>,
+    prisms: PrismTlas<T>,
     field: HeightField,
-    height_scale: T,
-    uv_scale: T,
     texel_size: T,
-    roots: Vec<RootNodes>,
-    tlas: Bvh4<T>,
-}
-
-/// Highest root level: texel coordinates are below 2^22 in magnitude
-/// ([`MAX_TEXEL_COORDINATE`]), so a triangle's texel range spans fewer than 2^23 texels and
-/// fits 2 nodes of level 23.
-const MAX_ROOT_LEVEL: usize = 23;
-/// Entries of the BLAS stack: up to 4 roots, then each popped inner node pushes at most 4
-/// children (3 more than it took), once per level on the way down. Kept small: the array
-/// is initialised per prism test.
-const BLAS_STACK: usize = 4 + 3 * MAX_ROOT_LEVEL;
-
-#[derive(Clone, Copy)]
-struct Pending<T> {
-    level: u32,
-    x: i32,
-    y: i32,
-    t_in: T,
 }
 
 impl<T: Real> DisplacedSurface<T> {
@@ -143,54 +119,23 @@ impl<T: Real> DisplacedSurface<T> {
         height_scale: T,
         tiling: T,
     ) -> Result<Self, DisplacementError> {
-        if !height_scale.is_finite() {
-            return Err(DisplacementError::BadHeightScale(height_scale.to_f64()));
-        }
-        if !(tiling > T::ZERO && tiling.is_finite()) {
-            return Err(DisplacementError::BadTiling(tiling.to_f64()));
-        }
         let side = field.side() as f64;
-        let texel_size = T::ONE / T::from_f64(side);
-        let mut roots = Vec::with_capacity(mesh.triangle_count());
-        let mut boxes = Vec::with_capacity(mesh.triangle_count());
-        for i in 0..mesh.triangle_count() {
-            let prism = mesh.prism(i, height_scale, tiling);
-            boxes.push(prism_bounds(&prism));
-            let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-            for uv in prism.uv {
-                for (a, c) in [uv.x(), uv.y()].into_iter().enumerate() {
-                    let texels = c.to_f64() * side;
-                    lo[a] = lo[a].min(texels);
-                    hi[a] = hi[a].max(texels);
-                }
-            }
-            if !(lo[0]
-                .abs()
-                .max(lo[1].abs())
-                .max(hi[0].abs())
-                .max(hi[1].abs())
-                < MAX_TEXEL_COORDINATE)
-            {
-                return Err(DisplacementError::UvOutOfRange { triangle: i });
-            }
-            roots.push(root_nodes(lo, hi));
-        }
-        let tlas = Bvh4::build(&boxes, 1);
+        let prisms = PrismTlas::new(mesh, height_scale, tiling, side).map_err(|e| match e {
+            SetupError::HeightScale(v) => DisplacementError::BadHeightScale(v),
+            SetupError::Tiling(v) => DisplacementError::BadTiling(v),
+            SetupError::UvOutOfRange(triangle) => DisplacementError::UvOutOfRange { triangle },
+        })?;
         Ok(Self {
-            mesh,
+            prisms,
             field,
-            height_scale,
-            uv_scale: tiling,
-            texel_size,
-            roots,
-            tlas,
+            texel_size: T::ONE / T::from_f64(side),
         })
     }
 
     /// The base mesh.
     #[must_use]
     pub fn mesh(&self) -> &BaseMesh<T> {
-        &self.mesh
+        &self.prisms.mesh
     }
 
     /// The height field.
@@ -208,29 +153,27 @@ impl<T: Real> DisplacedSurface<T> {
     /// The TLAS.
     #[must_use]
     pub fn tlas(&self) -> &Bvh4<T> {
-        &self.tlas
+        &self.prisms.tlas
     }
 
     /// Root nodes of triangle `i`.
     #[must_use]
     pub fn roots(&self, i: usize) -> RootNodes {
-        self.roots[i]
+        self.prisms.roots(i)
     }
 
     /// The prism of triangle `i` (built on the fly).
     #[must_use]
     #[inline]
     pub fn prism(&self, i: usize) -> Prism<T> {
-        self.mesh.prism(i, self.height_scale, self.uv_scale)
+        self.prisms.prism(i)
     }
 
     /// Bytes of the acceleration data: height samples and pyramid, TLAS, roots (the mesh is
     /// counted separately by [`BaseMesh::memory_bytes`]).
     #[must_use]
     pub fn memory_bytes(&self) -> usize {
-        self.field.memory_bytes()
-            + self.tlas.memory_bytes()
-            + self.roots.len() * core::mem::size_of::<RootNodes>()
+        self.field.memory_bytes() + self.prisms.memory_bytes()
     }
 
     #[inline]
@@ -553,121 +496,31 @@ impl<T: Real> DisplacedSurface<T> {
         t_max: T,
         stats: &mut TraversalStats,
     ) -> Option<SurfaceHit<T>> {
-        let root = self.roots[tri];
-        let uv_tri = prism.uv.map(|t| {
-            [
-                t.x() * T::from_f64(self.field.side() as f64),
-                t.y() * T::from_f64(self.field.side() as f64),
-            ]
-        });
-        let mut stack = [Pending {
-            level: 0,
-            x: 0,
-            y: 0,
-            t_in: T::ZERO,
-        }; BLAS_STACK];
-        let mut depth = 0;
-        let mut best: Option<SurfaceHit<T>> = None;
-        let mut t_max = t_max;
-        // Visit candidates (children of a node, or the roots): box-test, sort, push.
-        let push_nodes = |level: u32,
-                          nodes: &mut dyn Iterator<Item = (i32, i32)>,
-                          t_max: T,
-                          stack: &mut [Pending<T>; BLAS_STACK],
-                          depth: &mut usize,
-                          stats: &mut TraversalStats| {
-            let mut found: [Pending<T>; 4] = [Pending {
-                level,
-                x: 0,
-                y: 0,
-                t_in: T::ZERO,
-            }; 4];
-            let mut n = 0;
-            for (x, y) in nodes {
-                // Texel discard: the node's texel square against the base triangle in uv.
-                let k = 1i64 << level;
-                let (tx0, ty0) = (i64::from(x) * k, i64::from(y) * k);
-                let [r0, r1, r2, r3] = root.texels;
-                if tx0 > i64::from(r2)
-                    || ty0 > i64::from(r3)
-                    || tx0 + k <= i64::from(r0)
-                    || ty0 + k <= i64::from(r1)
-                {
-                    continue;
-                }
-                let lo_t = [T::from_f64(tx0 as f64), T::from_f64(ty0 as f64)];
-                let hi_t = [T::from_f64((tx0 + k) as f64), T::from_f64((ty0 + k) as f64)];
-                if !square_meets_triangle(lo_t, hi_t, &uv_tri) {
-                    continue;
-                }
-                let [hmin, hmax] = self.field.texel_bounds(level, i64::from(x), i64::from(y));
-                let lo = [
-                    lo_t[0] * self.texel_size,
-                    lo_t[1] * self.texel_size,
-                    Self::height(hmin),
-                ];
-                let hi = [
-                    hi_t[0] * self.texel_size,
-                    hi_t[1] * self.texel_size,
-                    Self::height(hmax),
-                ];
-                stats.box_tests += 1;
-                if let Some(span) = intersect_box(prism, ray, lo, hi, t_min, t_max) {
-                    // Insertion sort, nearest first.
-                    let mut i = n;
-                    while i > 0 && found[i - 1].t_in > span.t_in {
-                        found[i] = found[i - 1];
-                        i -= 1;
-                    }
-                    found[i] = Pending {
-                        level,
-                        x,
-                        y,
-                        t_in: span.t_in,
-                    };
-                    n += 1;
-                }
-            }
-            for p in found[..n].iter().rev() {
-                stack[*depth] = *p;
-                *depth += 1;
-            }
-        };
-        let mut roots = (0..i32::from(root.ny))
-            .flat_map(|j| (0..i32::from(root.nx)).map(move |i| (root.x + i, root.y + j)));
-        push_nodes(root.level, &mut roots, t_max, &mut stack, &mut depth, stats);
-        while depth > 0 {
-            depth -= 1;
-            let node = stack[depth];
-            if node.t_in > t_max {
-                continue;
-            }
-            if node.level == 0 {
+        let mut best = None;
+        traverse_cells(
+            self.prisms.roots(tri),
+            prism,
+            ray,
+            self.texel_size,
+            t_min,
+            t_max,
+            stats,
+            |level, x, y| {
+                let [lo, hi] = self.field.texel_bounds(level, i64::from(x), i64::from(y));
+                [Self::height(lo), Self::height(hi)]
+            },
+            |x, y, t_max, stats| {
                 stats.texel_tests += 1;
-                if let Some((hit, part)) =
-                    self.intersect_texel(prism, ray, node.x, node.y, t_min, t_max)
-                {
-                    t_max = hit.t;
-                    best = Some(SurfaceHit {
-                        hit,
-                        triangle: tri as u32,
-                        texel: [node.x, node.y],
-                        part,
-                    });
-                }
-                continue;
-            }
-            let (x, y) = (node.x * 2, node.y * 2);
-            let mut children = [(x, y), (x + 1, y), (x, y + 1), (x + 1, y + 1)].into_iter();
-            push_nodes(
-                node.level - 1,
-                &mut children,
-                t_max,
-                &mut stack,
-                &mut depth,
-                stats,
-            );
-        }
+                let (hit, part) = self.intersect_texel(prism, ray, x, y, t_min, t_max)?;
+                best = Some(SurfaceHit {
+                    hit,
+                    triangle: tri as u32,
+                    texel: [x, y],
+                    part,
+                });
+                Some(hit.t)
+            },
+        );
         best
     }
 
@@ -681,7 +534,7 @@ impl<T: Real> DisplacedSurface<T> {
         t_min: T,
         t_max: T,
     ) -> Option<SurfaceHit<T>> {
-        let [x0, y0, x1, y1] = self.roots[tri].texels;
+        let [x0, y0, x1, y1] = self.prisms.roots(tri).texels;
         let mut best: Option<SurfaceHit<T>> = None;
         let mut t_max = t_max;
         for y in y0..=y1 {
@@ -709,34 +562,21 @@ impl<T: Real> DisplacedSurface<T> {
         t_max: T,
         stats: &mut TraversalStats,
     ) -> Option<SurfaceHit<T>> {
-        let slab = SlabRay::new(ray.origin, ray.dir);
-        let mut best = None;
-        self.tlas.traverse(&slab, t_min, t_max, |tri, t_max| {
-            let prism = self.prism(tri as usize);
-            stats.prism_tests += 1;
-            intersect_prism(&prism, ray, t_min, t_max)?;
-            let nl = NonlinearRay::new(&prism, ray);
-            let hit = self.intersect_blas(tri as usize, &prism, &nl, t_min, t_max, stats)?;
-            best = Some(hit);
-            Some(hit.hit.t)
-        });
-        best
+        self.prisms
+            .intersect(ray, t_min, t_max, stats, |tri, prism, nl, t_max, stats| {
+                let hit = self.intersect_blas(tri, prism, nl, t_min, t_max, stats)?;
+                Some((hit, hit.hit.t))
+            })
     }
 
     /// The nearest hit testing every texel of every triangle (no TLAS, no pyramid, no prism
     /// gate): the reference for tests.
     pub fn intersect_brute_force(&self, ray: &Ray<T>, t_min: T, t_max: T) -> Option<SurfaceHit<T>> {
-        let mut best: Option<SurfaceHit<T>> = None;
-        let mut t_max = t_max;
-        for tri in 0..self.mesh.triangle_count() {
-            let prism = self.prism(tri);
-            let nl = NonlinearRay::new(&prism, ray);
-            if let Some(hit) = self.intersect_blas_brute_force(tri, &prism, &nl, t_min, t_max) {
-                t_max = hit.hit.t;
-                best = Some(hit);
-            }
-        }
-        best
+        self.prisms
+            .intersect_brute_force(ray, t_max, |tri, prism, nl, t_max| {
+                let hit = self.intersect_blas_brute_force(tri, prism, nl, t_min, t_max)?;
+                Some((hit, hit.hit.t))
+            })
     }
 
     /// The world-space unit normal at a hit (Eq. 13), facing against the ray direction `dir`;
@@ -841,6 +681,6 @@ impl<T: Real> DisplacedSurface<T> {
     /// The prism boxes' union.
     #[must_use]
     pub fn bounds(&self) -> Aabb<T> {
-        self.tlas.bounds()
+        self.prisms.tlas.bounds()
     }
 }

@@ -38,6 +38,7 @@ compile_error!("nlrt-accel needs the `std` or the `libm` feature");
 extern crate alloc;
 
 mod bvh;
+mod cells;
 mod displacement;
 mod heightfield;
 mod mesh;

@@ -6,17 +6,16 @@
 
 use alloc::vec::Vec;
 use core::fmt;
-use nlrt_poly::{Real, Vector2, Vector3};
+use nlrt_poly::{Real, Vector3};
 use nlrt_shellmap::{
     Hit, NonlinearRay, Prism, Ray, TexturePlane, intersect_box, intersect_microtriangle,
-    intersect_prism, world_normal,
+    world_normal,
 };
 
-use crate::bvh::{Aabb, Bvh4, SlabRay};
-use crate::displacement::{
-    MAX_TEXEL_COORDINATE, RootNodes, TraversalStats, root_nodes, square_meets_triangle,
-};
-use crate::mesh::{BaseMesh, prism_bounds};
+use crate::bvh::{Aabb, Bvh4};
+use crate::cells::{PrismTlas, SetupError, traverse_cells};
+use crate::displacement::{MAX_TEXEL_COORDINATE, RootNodes, TraversalStats};
+use crate::mesh::BaseMesh;
 
 /// Why a shell object or surface was rejected.
 #[derive(Clone, Debug, PartialEq)]
@@ -137,24 +136,10 @@ pub struct ShellHit<T: Real> {
 /// A base mesh whose shell holds an object tiled `tiling x tiling` times per unit of uv.
 #[derive(Clone, Debug)]
 pub struct ShellSurface<T: Real> {
-    mesh: BaseMesh<T>,
+    prisms: PrismTlas<T>,
     object: ShellObject<T>,
-    height_scale: T,
-    tiling: T,
-    roots: Vec<RootNodes>,
-    tlas: Bvh4<T>,
 }
 
-#[derive(Clone, Copy)]
-struct Pending<T> {
-    level: u32,
-    x: i32,
-    y: i32,
-    t_in: T,
-}
-
-/// Quadtree stack: 3 more entries per level at most, levels below 32.
-const QUAD_STACK: usize = 3 * 32 + 4;
 /// Object-BVH stack (the BVH's depth is bounded by its builder: below 72).
 const OBJECT_STACK: usize = 3 * 72 + 4;
 
@@ -169,44 +154,12 @@ impl<T: Real> ShellSurface<T> {
         height_scale: T,
         tiling: T,
     ) -> Result<Self, ShellError> {
-        if !height_scale.is_finite() {
-            return Err(ShellError::BadHeightScale(height_scale.to_f64()));
-        }
-        if !(tiling > T::ZERO && tiling.is_finite()) {
-            return Err(ShellError::BadTiling(tiling.to_f64()));
-        }
-        let mut roots = Vec::with_capacity(mesh.triangle_count());
-        let mut boxes = Vec::with_capacity(mesh.triangle_count());
-        for i in 0..mesh.triangle_count() {
-            let prism = mesh.prism(i, height_scale, tiling);
-            boxes.push(prism_bounds(&prism));
-            let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-            for uv in prism.uv {
-                for (a, c) in [uv.x(), uv.y()].into_iter().enumerate() {
-                    lo[a] = lo[a].min(c.to_f64());
-                    hi[a] = hi[a].max(c.to_f64());
-                }
-            }
-            if !(lo[0]
-                .abs()
-                .max(lo[1].abs())
-                .max(hi[0].abs())
-                .max(hi[1].abs())
-                < MAX_TEXEL_COORDINATE)
-            {
-                return Err(ShellError::UvOutOfRange { triangle: i });
-            }
-            roots.push(root_nodes(lo, hi));
-        }
-        let tlas = Bvh4::build(&boxes, 1);
-        Ok(Self {
-            mesh,
-            object,
-            height_scale,
-            tiling,
-            roots,
-            tlas,
-        })
+        let prisms = PrismTlas::new(mesh, height_scale, tiling, 1.0).map_err(|e| match e {
+            SetupError::HeightScale(v) => ShellError::BadHeightScale(v),
+            SetupError::Tiling(v) => ShellError::BadTiling(v),
+            SetupError::UvOutOfRange(triangle) => ShellError::UvOutOfRange { triangle },
+        })?;
+        Ok(Self { prisms, object })
     }
 
     /// The object.
@@ -218,28 +171,26 @@ impl<T: Real> ShellSurface<T> {
     /// Root tiles of base triangle `i` (the `texels` field holds its tile range).
     #[must_use]
     pub fn roots(&self, i: usize) -> RootNodes {
-        self.roots[i]
+        self.prisms.roots(i)
     }
 
     /// The base mesh.
     #[must_use]
     pub fn mesh(&self) -> &BaseMesh<T> {
-        &self.mesh
+        &self.prisms.mesh
     }
 
     /// The prism of base triangle `i`.
     #[must_use]
     pub fn prism(&self, i: usize) -> Prism<T> {
-        self.mesh.prism(i, self.height_scale, self.tiling)
+        self.prisms.prism(i)
     }
 
     /// Bytes of acceleration data: object and its BVH (once), TLAS, roots. The quadtree
     /// costs nothing.
     #[must_use]
     pub fn memory_bytes(&self) -> usize {
-        self.object.memory_bytes()
-            + self.tlas.memory_bytes()
-            + self.roots.len() * core::mem::size_of::<RootNodes>()
+        self.object.memory_bytes() + self.prisms.memory_bytes()
     }
 
     #[inline]
@@ -353,101 +304,23 @@ impl<T: Real> ShellSurface<T> {
         t_max: T,
         stats: &mut TraversalStats,
     ) -> Option<ShellHit<T>> {
-        let root = self.roots[tri];
-        let uv_tri = prism.uv.map(|t| [t.x(), t.y()]);
         let [h_lo, h_hi] = self.object.h_range;
-        let mut stack = [Pending {
-            level: 0,
-            x: 0,
-            y: 0,
-            t_in: T::ZERO,
-        }; QUAD_STACK];
-        let mut depth = 0;
         let mut best = None;
-        let mut t_max = t_max;
-        let push = |level: u32,
-                    nodes: &mut dyn Iterator<Item = (i32, i32)>,
-                    t_max: T,
-                    stack: &mut [Pending<T>; QUAD_STACK],
-                    depth: &mut usize,
-                    stats: &mut TraversalStats| {
-            let mut found = [Pending {
-                level,
-                x: 0,
-                y: 0,
-                t_in: T::ZERO,
-            }; 4];
-            let mut n = 0;
-            for (x, y) in nodes {
-                let k = 1i64 << level;
-                let (tx0, ty0) = (i64::from(x) * k, i64::from(y) * k);
-                let [r0, r1, r2, r3] = root.texels;
-                if tx0 > i64::from(r2)
-                    || ty0 > i64::from(r3)
-                    || tx0 + k <= i64::from(r0)
-                    || ty0 + k <= i64::from(r1)
-                {
-                    continue;
-                }
-                let lo = [T::from_f64(tx0 as f64), T::from_f64(ty0 as f64)];
-                let hi = [T::from_f64((tx0 + k) as f64), T::from_f64((ty0 + k) as f64)];
-                if !square_meets_triangle(lo, hi, &uv_tri) {
-                    continue;
-                }
-                stats.box_tests += 1;
-                if let Some(span) = intersect_box(
-                    prism,
-                    ray,
-                    [lo[0], lo[1], h_lo],
-                    [hi[0], hi[1], h_hi],
-                    t_min,
-                    t_max,
-                ) {
-                    let mut i = n;
-                    while i > 0 && found[i - 1].t_in > span.t_in {
-                        found[i] = found[i - 1];
-                        i -= 1;
-                    }
-                    found[i] = Pending {
-                        level,
-                        x,
-                        y,
-                        t_in: span.t_in,
-                    };
-                    n += 1;
-                }
-            }
-            for p in found[..n].iter().rev() {
-                stack[*depth] = *p;
-                *depth += 1;
-            }
-        };
-        let mut roots = (0..i32::from(root.ny))
-            .flat_map(|j| (0..i32::from(root.nx)).map(move |i| (root.x + i, root.y + j)));
-        push(root.level, &mut roots, t_max, &mut stack, &mut depth, stats);
-        while depth > 0 {
-            depth -= 1;
-            let node = stack[depth];
-            if node.t_in > t_max {
-                continue;
-            }
-            if node.level == 0 {
-                self.intersect_tile(
-                    tri, prism, ray, node.x, node.y, t_min, &mut t_max, &mut best, stats,
-                );
-                continue;
-            }
-            let (x, y) = (node.x * 2, node.y * 2);
-            let mut children = [(x, y), (x + 1, y), (x, y + 1), (x + 1, y + 1)].into_iter();
-            push(
-                node.level - 1,
-                &mut children,
-                t_max,
-                &mut stack,
-                &mut depth,
-                stats,
-            );
-        }
+        traverse_cells(
+            self.prisms.roots(tri),
+            prism,
+            ray,
+            T::ONE,
+            t_min,
+            t_max,
+            stats,
+            |_, _, _| [h_lo, h_hi],
+            |x, y, t_max, stats| {
+                let mut t = t_max;
+                self.intersect_tile(tri, prism, ray, x, y, t_min, &mut t, &mut best, stats);
+                (t < t_max).then_some(t)
+            },
+        );
         best
     }
 
@@ -460,7 +333,7 @@ impl<T: Real> ShellSurface<T> {
         t_min: T,
         t_max: T,
     ) -> Option<ShellHit<T>> {
-        let [x0, y0, x1, y1] = self.roots[tri].texels;
+        let [x0, y0, x1, y1] = self.prisms.roots(tri).texels;
         let mut best = None;
         let mut t_max = t_max;
         for y in y0..=y1 {
@@ -491,33 +364,20 @@ impl<T: Real> ShellSurface<T> {
         t_max: T,
         stats: &mut TraversalStats,
     ) -> Option<ShellHit<T>> {
-        let slab = SlabRay::new(ray.origin, ray.dir);
-        let mut best = None;
-        self.tlas.traverse(&slab, t_min, t_max, |tri, t_max| {
-            let prism = self.prism(tri as usize);
-            stats.prism_tests += 1;
-            intersect_prism(&prism, ray, t_min, t_max)?;
-            let nl = NonlinearRay::new(&prism, ray);
-            let hit = self.intersect_blas(tri as usize, &prism, &nl, t_min, t_max, stats)?;
-            best = Some(hit);
-            Some(hit.hit.t)
-        });
-        best
+        self.prisms
+            .intersect(ray, t_min, t_max, stats, |tri, prism, nl, t_max, stats| {
+                let hit = self.intersect_blas(tri, prism, nl, t_min, t_max, stats)?;
+                Some((hit, hit.hit.t))
+            })
     }
 
     /// The nearest hit by brute force over every base triangle, tile and object triangle.
     pub fn intersect_brute_force(&self, ray: &Ray<T>, t_min: T, t_max: T) -> Option<ShellHit<T>> {
-        let mut best: Option<ShellHit<T>> = None;
-        let mut t_max = t_max;
-        for tri in 0..self.mesh.triangle_count() {
-            let prism = self.prism(tri);
-            let nl = NonlinearRay::new(&prism, ray);
-            if let Some(hit) = self.intersect_blas_brute_force(tri, &prism, &nl, t_min, t_max) {
-                t_max = hit.hit.t;
-                best = Some(hit);
-            }
-        }
-        best
+        self.prisms
+            .intersect_brute_force(ray, t_max, |tri, prism, nl, t_max| {
+                let hit = self.intersect_blas_brute_force(tri, prism, nl, t_min, t_max)?;
+                Some((hit, hit.hit.t))
+            })
     }
 
     /// World-space unit normal at a hit (Eq. 13), facing against `dir`.
