@@ -4,7 +4,7 @@
 //! nonlinear ray nearest first.
 
 use alloc::vec::Vec;
-use nlrt_poly::{Real, Vector2};
+use nlrt_poly::{Real, Vector2, Vector3};
 use nlrt_shellmap::{NonlinearRay, Prism, Ray, intersect_box, intersect_prism};
 
 use crate::bvh::{Bvh4, SlabRay};
@@ -273,4 +273,15 @@ pub(crate) fn traverse_cells<T: Real>(
             stats,
         );
     }
+}
+
+/// `n` (a world normal from Eq. 13, any length and sign) as a unit vector facing against the
+/// ray direction `dir`; `None` where it is zero (the shell degenerates to a line or point).
+pub(crate) fn facing_unit<T: Real>(n: T::Vec3, dir: T::Vec3) -> Option<T::Vec3> {
+    let len = n.length();
+    if !(len > T::ZERO && len.is_finite()) {
+        return None;
+    }
+    let n = n * (T::ONE / len);
+    Some(if n.dot(dir) > T::ZERO { -n } else { n })
 }

@@ -7,7 +7,7 @@ use nlrt_poly::{horner_with_bound_scaled, solve_cubic_in, solve_quadratic_in};
 use nlrt_shellmap::{Hit, NonlinearRay, Prism, Ray, TexturePlane, alpha_beta_eq11, world_normal};
 
 use crate::bvh::{Aabb, Bvh4};
-use crate::cells::{PrismTlas, SetupError, traverse_cells};
+use crate::cells::{PrismTlas, SetupError, facing_unit, traverse_cells};
 use crate::heightfield::{HEIGHT_ONE, HeightField};
 use crate::mesh::BaseMesh;
 
@@ -606,12 +606,7 @@ impl<T: Real> DisplacedSurface<T> {
             hit.hit.beta,
             hit.hit.h,
         );
-        let len = n.length();
-        if !(len > T::ZERO && len.is_finite()) {
-            return None;
-        }
-        let n = n * (T::ONE / len);
-        Some(if n.dot(dir) > T::ZERO { -n } else { n })
+        facing_unit(n, dir)
     }
 }
 

@@ -13,7 +13,7 @@ use nlrt_shellmap::{
 };
 
 use crate::bvh::{Aabb, Bvh4};
-use crate::cells::{PrismTlas, SetupError, traverse_cells};
+use crate::cells::{PrismTlas, SetupError, facing_unit, traverse_cells};
 use crate::displacement::{MAX_TEXEL_COORDINATE, RootNodes, TraversalStats};
 use crate::mesh::BaseMesh;
 
@@ -397,11 +397,6 @@ impl<T: Real> ShellSurface<T> {
             hit.hit.beta,
             hit.hit.h,
         );
-        let len = n.length();
-        if !(len > T::ZERO && len.is_finite()) {
-            return None;
-        }
-        let n = n * (T::ONE / len);
-        Some(if n.dot(dir) > T::ZERO { -n } else { n })
+        facing_unit(n, dir)
     }
 }
