@@ -606,7 +606,7 @@ impl<T: Real> DisplacedSurface<T> {
             hit.hit.beta,
             hit.hit.h,
         );
-        facing_unit(n, dir)
+        facing_unit::<T>(n, dir)
     }
 }
 

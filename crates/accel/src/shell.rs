@@ -397,6 +397,6 @@ impl<T: Real> ShellSurface<T> {
             hit.hit.beta,
             hit.hit.h,
         );
-        facing_unit(n, dir)
+        facing_unit::<T>(n, dir)
     }
 }
