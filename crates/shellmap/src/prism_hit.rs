@@ -112,9 +112,22 @@ pub fn intersect_prism<T: Real>(
     for (i, j) in [(0, 1), (1, 2), (2, 0)] {
         side_crossings(prism, ray, i, j, &mut add);
     }
-    // A ray starting inside: the entry is its start.
+    // A ray starting inside: the entry is its start. The prism lies in the box of its six
+    // corners (sides are bilinear patches between them), so a start outside that box skips
+    // the inverse map (a cubic).
     let start = ray.at(t_min.max(-T::MAX));
+    let in_corner_box = (0..3).all(|axis| {
+        let (mut lo, mut hi) = (T::INFINITY, T::NEG_INFINITY);
+        for i in 0..3 {
+            for c in [prism.p[i], prism.p[i] + prism.n[i]] {
+                lo = lo.min(c.get(axis));
+                hi = hi.max(c.get(axis));
+            }
+        }
+        start.get(axis) >= lo && start.get(axis) <= hi
+    });
     if t_min.is_finite()
+        && in_corner_box
         && let Some(c) = prism.world_to_canonical(start, T::ZERO, T::ONE)
         && c.alpha >= T::ZERO
         && c.beta >= T::ZERO
