@@ -145,6 +145,17 @@ enum Command {
         #[arg(short, long)]
         output: Option<PathBuf>,
     },
+    /// Write a built-in scene as a scene file (TOML + OBJ + 16-bit PNG or object OBJ).
+    Export {
+        /// Built-in scene name.
+        scene: String,
+        /// Map sizes.
+        #[arg(long, value_enum, default_value = "small")]
+        scene_size: SceneSize,
+        /// Output directory.
+        #[arg(short, long, default_value = "scenes/builtin")]
+        output: PathBuf,
+    },
     /// Speed against error of the cubic solvers (nlrt-poly, closed form, `roots` crate) for
     /// f32 and f64, judged by the MPFR oracle.
     Solvers {
@@ -355,6 +366,25 @@ fn main() -> ExitCode {
             args,
             solver_samples,
         } => report_command(output, &args, solver_samples),
+        Command::Export {
+            scene,
+            scene_size,
+            output,
+        } => {
+            if let Err(e) = check_scenes(std::slice::from_ref(&scene)) {
+                return fail("export", e);
+            }
+            let Some(built) = scenes::builtin(&scene, scene_size.into()) else {
+                return fail("export", "unknown scene");
+            };
+            match nlrt_render::scene_file::export(&built, &output) {
+                Ok(path) => {
+                    println!("{scene} written to {}", path.display());
+                    ExitCode::SUCCESS
+                }
+                Err(e) => fail("export", e),
+            }
+        }
         Command::Watertight {
             scene,
             rays,

@@ -334,3 +334,89 @@ fn load_height_map(path: &Path) -> Result<HeightField, String> {
     }
     HeightField::new(w, samples, Wrap::Repeat).map_err(|e| err(e.to_string()))
 }
+
+/// Writes `scene` as a scene file `<dir>/<name>.toml` with its OBJ base mesh and its PNG
+/// height map (16-bit) or OBJ object, loadable by [`load`]. Positions, normals and uvs are
+/// written with 9 significant digits (OBJ is text; `tobj` reads them as f32).
+///
+/// # Errors
+/// When a file cannot be written.
+pub fn export(scene: &Scene, dir: &Path) -> Result<PathBuf, String> {
+    use std::fmt::Write as _;
+    let name = scene.name;
+    let io = |path: &Path, e: std::io::Error| format!("{}: {e}", path.display());
+    std::fs::create_dir_all(dir).map_err(|e| io(dir, e))?;
+    let mut obj = String::from("# exported by nlrt\n");
+    for p in &scene.positions {
+        let _ = writeln!(obj, "v {:.9} {:.9} {:.9}", p.x, p.y, p.z);
+    }
+    for t in &scene.uvs {
+        let _ = writeln!(obj, "vt {:.9} {:.9}", t.x, t.y);
+    }
+    for n in &scene.normals {
+        let _ = writeln!(obj, "vn {:.9} {:.9} {:.9}", n.x, n.y, n.z);
+    }
+    for t in &scene.triangles {
+        let [a, b, c] = t.map(|i| i + 1);
+        let _ = writeln!(obj, "f {a}/{a}/{a} {b}/{b}/{b} {c}/{c}/{c}");
+    }
+    let mesh_path = dir.join(format!("{name}.obj"));
+    std::fs::write(&mesh_path, obj).map_err(|e| io(&mesh_path, e))?;
+    let content = match &scene.content {
+        Content::Displacement(field) => {
+            let path = dir.join(format!("{name}-height.png"));
+            let file = std::fs::File::create(&path).map_err(|e| io(&path, e))?;
+            let side = field.side() as u32;
+            let mut encoder = png::Encoder::new(std::io::BufWriter::new(file), side, side);
+            encoder.set_color(png::ColorType::Grayscale);
+            encoder.set_depth(png::BitDepth::Sixteen);
+            let bytes: Vec<u8> = field
+                .samples()
+                .iter()
+                .flat_map(|s| s.to_be_bytes())
+                .collect();
+            encoder
+                .write_header()
+                .and_then(|mut w| w.write_image_data(&bytes))
+                .map_err(|e| format!("{}: {e}", path.display()))?;
+            format!(
+                "[displacement]\nheight_map = \"{name}-height.png\"\nheight_scale = {}\ntiling = {}\n",
+                scene.height_scale, scene.tiling
+            )
+        }
+        Content::Shell(object) => {
+            let path = dir.join(format!("{name}-object.obj"));
+            let mut text = String::from("# (u, v, h) in the unit tile, exported by nlrt\n");
+            for t in object {
+                for p in t {
+                    let _ = writeln!(text, "v {:.9} {:.9} {:.9}", p.x, p.y, p.z);
+                }
+            }
+            for k in 0..object.len() {
+                let _ = writeln!(text, "f {} {} {}", 3 * k + 1, 3 * k + 2, 3 * k + 3);
+            }
+            std::fs::write(&path, text).map_err(|e| io(&path, e))?;
+            format!(
+                "[shell]\nobject = \"{name}-object.obj\"\nheight_scale = {}\ntiling = {}\n",
+                scene.height_scale, scene.tiling
+            )
+        }
+    };
+    let c = &scene.camera;
+    let toml = format!(
+        "# The built-in scene '{name}', exported by `nlrt export {name}`.\n\n[mesh]\nobj = \"{name}.obj\"\n\n{content}\n[camera]\neye = [{}, {}, {}]\ntarget = [{}, {}, {}]\nfov_degrees = {}\nsun = [{}, {}, {}]\n",
+        c.eye.x,
+        c.eye.y,
+        c.eye.z,
+        c.target.x,
+        c.target.y,
+        c.target.z,
+        c.fov_degrees,
+        scene.sun.x,
+        scene.sun.y,
+        scene.sun.z
+    );
+    let path = dir.join(format!("{name}.toml"));
+    std::fs::write(&path, toml).map_err(|e| io(&path, e))?;
+    Ok(path)
+}
