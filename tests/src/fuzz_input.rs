@@ -204,6 +204,25 @@ fn base_and_ray<T: Real>(x: &[T]) -> Option<(nlrt_accel::BaseMesh<T>, nlrt_shell
     Some((mesh, ray))
 }
 
+/// What every hit of a traversal must be: finite, `t >= 0`, `h` in `[0, 1]`, `(alpha, beta)`
+/// in the base triangle (`context` is printed on failure).
+fn check_traversal_hit<T: Real>(h: &nlrt_shellmap::Hit<T>, context: &dyn core::fmt::Debug) {
+    assert!(
+        [h.t, h.alpha, h.beta, h.h, h.u, h.v]
+            .iter()
+            .all(|v| v.is_finite()),
+        "non-finite hit {context:?}"
+    );
+    assert!(
+        h.t >= T::ZERO && h.h >= T::ZERO && h.h <= T::ONE,
+        "hit out of range {context:?}"
+    );
+    assert!(
+        h.alpha >= T::ZERO && h.beta >= T::ZERO && h.alpha + h.beta <= T::ONE,
+        "hit outside the prism {context:?}"
+    );
+}
+
 /// Texel (or tile) ranges up to this many cells are also tested by brute force.
 const BRUTE_FORCE_CELLS: i64 = 4096;
 
@@ -240,21 +259,7 @@ pub fn fuzz_displacement<T: Real>(data: &[u8]) {
     };
     let fast = surface.intersect(&ray, T::ZERO, T::INFINITY, &mut TraversalStats::default());
     if let Some(hit) = fast {
-        let h = hit.hit;
-        assert!(
-            [h.t, h.alpha, h.beta, h.h, h.u, h.v]
-                .iter()
-                .all(|v| v.is_finite()),
-            "non-finite hit {hit:?}"
-        );
-        assert!(
-            h.t >= T::ZERO && h.h >= T::ZERO && h.h <= T::ONE,
-            "hit out of range {hit:?}"
-        );
-        assert!(
-            h.alpha >= T::ZERO && h.beta >= T::ZERO && h.alpha + h.beta <= T::ONE,
-            "hit outside the prism {hit:?}"
-        );
+        check_traversal_hit(&hit.hit, &hit);
     }
     let [x0, y0, x1, y1] = surface.roots(0).texels.map(i64::from);
     if (x1 - x0 + 1) * (y1 - y0 + 1) <= BRUTE_FORCE_CELLS
@@ -307,16 +312,7 @@ pub fn fuzz_shell<T: Real>(data: &[u8]) {
     let fast = surface.intersect(&ray, T::ZERO, T::INFINITY, &mut TraversalStats::default());
     if let Some(hit) = fast {
         let h = hit.hit;
-        assert!(
-            [h.t, h.alpha, h.beta, h.h, h.u, h.v]
-                .iter()
-                .all(|v| v.is_finite()),
-            "non-finite hit {hit:?}"
-        );
-        assert!(
-            h.t >= T::ZERO && h.h >= T::ZERO && h.h <= T::ONE,
-            "hit out of range {hit:?}"
-        );
+        check_traversal_hit(&h, &hit);
         let [x0, y0, x1, y1] = surface.roots(0).texels.map(i64::from);
         if (x1 - x0 + 1) * (y1 - y0 + 1) > BRUTE_FORCE_CELLS {
             return;

@@ -194,26 +194,6 @@ fn difference_image(a: &Frame, b: &Frame) -> Vec<u8> {
     out
 }
 
-/// The target features this binary was compiled with (FMA matters for the solvers).
-#[must_use]
-pub fn target_features() -> String {
-    let mut f = Vec::new();
-    if cfg!(target_feature = "fma") {
-        f.push("fma");
-    }
-    if cfg!(target_feature = "avx2") {
-        f.push("avx2");
-    }
-    if cfg!(target_feature = "sse4.2") {
-        f.push("sse4.2");
-    }
-    if f.is_empty() {
-        "none beyond the baseline".into()
-    } else {
-        f.join(", ")
-    }
-}
-
 /// Runs every scene and writes images (when `out_dir` is set); returns the Markdown tables.
 ///
 /// # Errors
@@ -232,7 +212,7 @@ pub fn run(opts: &ReportOptions) -> Result<String, String> {
         r.spp,
         r.bounces,
         rayon::current_num_threads(),
-        target_features(),
+        crate::solvers::target_features(),
         opts.size
     );
     let _ = writeln!(
