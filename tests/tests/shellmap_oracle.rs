@@ -30,21 +30,8 @@ fn check<T: Real>(
     o: [f64; 2],
 ) -> Result<(), TestCaseError> {
     let v = |x: f64, y: f64, z: f64| T::Vec3::new(T::from_f64(x), T::from_f64(y), T::from_f64(z));
-    let w = |x: f64, y: f64| T::Vec2::new(T::from_f64(x), T::from_f64(y));
     // Unit uvs: alpha = u, beta = v. Gently tilted normals (an unfolded prism).
-    let prism = Prism::<T>::new(
-        [
-            v(0.1 * r[0], 0.1 * r[1], 0.0),
-            v(1.0, 0.1 * r[2], 0.1 * r[3]),
-            v(0.1 * r[4], 1.0, 0.1 * r[5]),
-        ],
-        [
-            v(0.1 * r[6], 0.1 * r[7], 1.0),
-            v(0.1 * r[8], 0.1 * r[9], 1.0),
-            v(0.1 * r[10], 0.1 * r[11], 1.0),
-        ],
-        [w(0.0, 0.0), w(1.0, 0.0), w(0.0, 1.0)],
-    );
+    let prism = gentle_prism::<T>(r);
     let (u0, v0) = (corner[0] * 0.5, corner[1] * 0.5);
     let tri = [
         v(u0, v0, heights[0]),
@@ -157,7 +144,8 @@ fn f32_disagreement_rates() {
     }
 }
 
-/// The well-shaped prism of [`check`] (normals tilted by at most 0.1 x sqrt 2).
+/// A well-shaped prism: base near the unit right triangle, normals tilted by at most
+/// 0.1 x sqrt 2, unit uvs (so alpha = u, beta = v).
 fn gentle_prism<T: Real>(r: &[f64; 12]) -> Prism<T> {
     let v = |x: f64, y: f64, z: f64| T::Vec3::new(T::from_f64(x), T::from_f64(y), T::from_f64(z));
     let w = |x: f64, y: f64| T::Vec2::new(T::from_f64(x), T::from_f64(y));
