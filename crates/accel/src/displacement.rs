@@ -201,11 +201,13 @@ impl<T: Real> DisplacedSurface<T> {
         (uv, h)
     }
 
-    /// The plane of the microtriangle `part` of texel `(x, y)` (normal with `n_h > 0`).
+    /// The plane of the microtriangle `part` of texel `(x, y)` (normal with `n_h > 0`); the
+    /// flat plane `h = const` whenever the texel is flat, whatever `part` says.
     fn texel_plane(&self, x: i32, y: i32, part: TexelPart) -> Option<TexturePlane<T>> {
         let ([u0, v0, u1, v1], [h00, h10, h01, h11]) = self.texel_geometry(x, y);
         let p = |u: T, v: T, h: T| T::Vec3::new(u, v, h);
-        match part {
+        let flat = h00 == h10 && h00 == h01 && h00 == h11;
+        match if flat { TexelPart::Flat } else { part } {
             TexelPart::Lower => {
                 TexturePlane::through(&[p(u0, v0, h00), p(u1, v0, h10), p(u1, v1, h11)])
             }
@@ -437,12 +439,6 @@ impl<T: Real> DisplacedSurface<T> {
                         2 => (x, y - 1, TexelPart::Upper),
                         _ => (x, y + 1, TexelPart::Lower),
                     };
-                    let (_, hs) = self.texel_geometry(nx, ny);
-                    let part = if hs[0] == hs[1] && hs[0] == hs[2] && hs[0] == hs[3] {
-                        TexelPart::Flat
-                    } else {
-                        part
-                    };
                     let other = self.texel_plane(nx, ny, part).map(|p| p.ray_cubic(ray));
                     Some((own_cubic, own_abh, own_part, other))
                 }
@@ -485,8 +481,9 @@ impl<T: Real> DisplacedSurface<T> {
     /// The nearest hit of `ray` on the displaced surface of triangle `tri` through the
     /// min-max pyramid (the BLAS): texture-space box test per node, children in order of
     /// entry distance, nodes entered beyond the current nearest hit skipped, texels whose uv
-    /// square misses the base triangle's uv triangle skipped (texel discard), and per
-    /// microtriangle the cubic solved only between its lowest and highest vertex.
+    /// square misses the base triangle's uv triangle skipped (texel discard), and per texel
+    /// the watertight piece search of [`DisplacedSurface::intersect_texel`], each plane's
+    /// cubic solved only on the height interval of its piece.
     pub fn intersect_blas(
         &self,
         tri: usize,
