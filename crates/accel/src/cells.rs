@@ -94,9 +94,29 @@ impl<T: Real> PrismTlas<T> {
         self.tlas.memory_bytes() + self.roots.len() * core::mem::size_of::<RootNodes>()
     }
 
-    /// TLAS traversal (conservative slab tests, nearest first), the exact ray-prism test as
-    /// a gate, then `blas(triangle, prism, nonlinear ray, t_max)`, which returns a hit and
+    /// TLAS traversal (conservative slab tests, nearest first): `per_prism(triangle, prism,
+    /// t_max)` for each prism whose box the ray enters before `t_max`, which returns a hit and
     /// its distance when it finds one nearer than `t_max`.
+    pub(crate) fn traverse<H>(
+        &self,
+        ray: &Ray<T>,
+        t_min: T,
+        t_max: T,
+        mut per_prism: impl FnMut(usize, &Prism<T>, T) -> Option<(H, T)>,
+    ) -> Option<H> {
+        let slab = SlabRay::new(ray.origin, ray.dir);
+        let mut best = None;
+        self.tlas.traverse(&slab, t_min, t_max, |tri, t_max| {
+            let prism = self.prism(tri as usize);
+            let (hit, t) = per_prism(tri as usize, &prism, t_max)?;
+            best = Some(hit);
+            Some(t)
+        });
+        best
+    }
+
+    /// [`PrismTlas::traverse`] with the exact ray-prism test as a gate, then `blas(triangle,
+    /// prism, nonlinear ray, t_max)`.
     pub(crate) fn intersect<H>(
         &self,
         ray: &Ray<T>,
@@ -111,18 +131,12 @@ impl<T: Real> PrismTlas<T> {
             &mut TraversalStats,
         ) -> Option<(H, T)>,
     ) -> Option<H> {
-        let slab = SlabRay::new(ray.origin, ray.dir);
-        let mut best = None;
-        self.tlas.traverse(&slab, t_min, t_max, |tri, t_max| {
-            let prism = self.prism(tri as usize);
+        self.traverse(ray, t_min, t_max, |tri, prism, t_max| {
             stats.prism_tests += 1;
-            intersect_prism(&prism, ray, t_min, t_max)?;
-            let nl = NonlinearRay::new(&prism, ray);
-            let (hit, t) = blas(tri as usize, &prism, &nl, t_max, stats)?;
-            best = Some(hit);
-            Some(t)
-        });
-        best
+            intersect_prism(prism, ray, t_min, t_max)?;
+            let nl = NonlinearRay::new(prism, ray);
+            blas(tri, prism, &nl, t_max, stats)
+        })
     }
 
     /// Every triangle, no TLAS and no gate: `per_triangle` as in [`PrismTlas::intersect`].
@@ -163,27 +177,20 @@ const MAX_ROOT_LEVEL: usize = 23;
 /// is initialised per prism test.
 const STACK: usize = 4 + 3 * MAX_ROOT_LEVEL;
 
-/// The implicit quadtree over the cells of one base triangle, nearest first: per node a
-/// texture-space box test (cells `[x 2^l, (x + 1) 2^l)` times `cell_size` in uv, heights
-/// `node_heights(level, x, y)`), cells whose square misses the triangle's uv triangle
-/// skipped, nodes entered beyond the current `t_max` skipped; `leaf(x, y, t_max, stats)`
-/// tests a cell and returns the distance of a hit nearer than `t_max`.
-#[allow(clippy::too_many_arguments)]
+/// The implicit quadtree over the cells of one base triangle, nearest first: per node an
+/// entry test (`node_entry(level, x, y, t_max)`: the entry distance of the node's volume, cells
+/// `[x 2^l, (x + 1) 2^l)`, or `None` when the ray misses it before `t_max`), cells whose square
+/// misses the triangle's uv triangle `uv_tri` (in cell units) skipped, nodes entered beyond the
+/// current `t_max` skipped; `leaf(x, y, t_max, stats)` tests a cell and returns the distance of
+/// a hit nearer than `t_max`.
 pub(crate) fn traverse_cells<T: Real>(
     root: RootNodes,
-    prism: &Prism<T>,
-    ray: &NonlinearRay<T>,
-    cell_size: T,
-    t_min: T,
+    uv_tri: [[T; 2]; 3],
     mut t_max: T,
     stats: &mut TraversalStats,
-    node_heights: impl Fn(u32, i32, i32) -> [T; 2],
+    node_entry: impl Fn(u32, i32, i32, T) -> Option<T>,
     mut leaf: impl FnMut(i32, i32, T, &mut TraversalStats) -> Option<T>,
 ) {
-    let cells_per_unit = T::ONE / cell_size;
-    let uv_tri = prism
-        .uv
-        .map(|t| [t.x() * cells_per_unit, t.y() * cells_per_unit]);
     let mut stack = [Pending {
         level: 0,
         x: 0,
@@ -217,28 +224,14 @@ pub(crate) fn traverse_cells<T: Real>(
             if !square_meets_triangle(lo, hi, &uv_tri) {
                 continue;
             }
-            let [h_lo, h_hi] = node_heights(level, x, y);
             stats.box_tests += 1;
-            let span = intersect_box(
-                prism,
-                ray,
-                [lo[0] * cell_size, lo[1] * cell_size, h_lo],
-                [hi[0] * cell_size, hi[1] * cell_size, h_hi],
-                t_min,
-                t_max,
-            );
-            if let Some(span) = span {
+            if let Some(t_in) = node_entry(level, x, y, t_max) {
                 let mut i = n;
-                while i > 0 && found[i - 1].t_in > span.t_in {
+                while i > 0 && found[i - 1].t_in > t_in {
                     found[i] = found[i - 1];
                     i -= 1;
                 }
-                found[i] = Pending {
-                    level,
-                    x,
-                    y,
-                    t_in: span.t_in,
-                };
+                found[i] = Pending { level, x, y, t_in };
                 n += 1;
             }
         }
@@ -273,6 +266,41 @@ pub(crate) fn traverse_cells<T: Real>(
             stats,
         );
     }
+}
+
+/// The prism's uv triangle in cell units (`cell_size`: the uv side of a cell).
+pub(crate) fn uv_in_cells<T: Real>(prism: &Prism<T>, cell_size: T) -> [[T; 2]; 3] {
+    let cells_per_unit = T::ONE / cell_size;
+    prism
+        .uv
+        .map(|t| [t.x() * cells_per_unit, t.y() * cells_per_unit])
+}
+
+/// Entry distance of the nonlinear ray into the texture-space box of node `(level, x, y)`
+/// with heights `h` (the node test of nonlinear tracing).
+#[allow(clippy::too_many_arguments)]
+#[inline]
+pub(crate) fn texture_box_entry<T: Real>(
+    prism: &Prism<T>,
+    ray: &NonlinearRay<T>,
+    cell_size: T,
+    (level, x, y): (u32, i32, i32),
+    [h_lo, h_hi]: [T; 2],
+    t_min: T,
+    t_max: T,
+) -> Option<T> {
+    let k = 1i64 << level;
+    let (cx0, cy0) = (i64::from(x) * k, i64::from(y) * k);
+    let cell = |c: i64| T::from_f64(c as f64) * cell_size;
+    intersect_box(
+        prism,
+        ray,
+        [cell(cx0), cell(cy0), h_lo],
+        [cell(cx0 + k), cell(cy0 + k), h_hi],
+        t_min,
+        t_max,
+    )
+    .map(|span| span.t_in)
 }
 
 /// `n` (a world normal from Eq. 13, any length and sign) as a unit vector facing against the

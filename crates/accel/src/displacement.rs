@@ -7,7 +7,9 @@ use nlrt_poly::{horner_with_bound_scaled, solve_cubic_in, solve_quadratic_in};
 use nlrt_shellmap::{Hit, NonlinearRay, Prism, Ray, TexturePlane, alpha_beta_eq11, world_normal};
 
 use crate::bvh::{Aabb, Bvh4};
-use crate::cells::{PrismTlas, SetupError, facing_unit, traverse_cells};
+use crate::cells::{
+    PrismTlas, SetupError, facing_unit, texture_box_entry, traverse_cells, uv_in_cells,
+};
 use crate::heightfield::{HEIGHT_ONE, HeightField};
 use crate::mesh::BaseMesh;
 
@@ -100,9 +102,9 @@ pub struct TraversalStats {
 /// TLAS over its prisms and the per-triangle roots into the height field's pyramid.
 #[derive(Clone, Debug)]
 pub struct DisplacedSurface<T: Real> {
-    prisms: PrismTlas<T>,
-    field: HeightField,
-    texel_size: T,
+    pub(crate) prisms: PrismTlas<T>,
+    pub(crate) field: HeightField,
+    pub(crate) texel_size: T,
 }
 
 impl<T: Real> DisplacedSurface<T> {
@@ -177,7 +179,7 @@ impl<T: Real> DisplacedSurface<T> {
     }
 
     #[inline]
-    fn height(s: u16) -> T {
+    pub(crate) fn height(s: u16) -> T {
         // Same division for samples and pyramid bounds: rounding is monotonic, so a bound
         // stays a bound after conversion.
         T::from_i32(i32::from(s)) / T::from_i32(i32::from(HEIGHT_ONE))
@@ -496,15 +498,13 @@ impl<T: Real> DisplacedSurface<T> {
         let mut best = None;
         traverse_cells(
             self.prisms.roots(tri),
-            prism,
-            ray,
-            self.texel_size,
-            t_min,
+            uv_in_cells(prism, self.texel_size),
             t_max,
             stats,
-            |level, x, y| {
+            |level, x, y, t_max| {
                 let [lo, hi] = self.field.texel_bounds(level, i64::from(x), i64::from(y));
-                [Self::height(lo), Self::height(hi)]
+                let h = [Self::height(lo), Self::height(hi)];
+                texture_box_entry(prism, ray, self.texel_size, (level, x, y), h, t_min, t_max)
             },
             |x, y, t_max, stats| {
                 stats.texel_tests += 1;

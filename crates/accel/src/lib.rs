@@ -37,6 +37,7 @@ compile_error!("nlrt-accel needs the `std` or the `libm` feature");
 
 extern crate alloc;
 
+mod affine;
 mod bvh;
 mod cells;
 mod displacement;
@@ -44,6 +45,7 @@ mod heightfield;
 mod mesh;
 mod shell;
 
+pub use affine::AffineHit;
 pub use bvh::{ARITY, Aabb, Bvh4, Node4, SlabRay};
 pub use displacement::{
     DisplacedSurface, DisplacementError, MAX_TEXEL_COORDINATE, RootNodes, SurfaceHit, TexelPart,

@@ -13,7 +13,9 @@ use nlrt_shellmap::{
 };
 
 use crate::bvh::{Aabb, Bvh4};
-use crate::cells::{PrismTlas, SetupError, facing_unit, traverse_cells};
+use crate::cells::{
+    PrismTlas, SetupError, facing_unit, texture_box_entry, traverse_cells, uv_in_cells,
+};
 use crate::displacement::{MAX_TEXEL_COORDINATE, RootNodes, TraversalStats};
 use crate::mesh::BaseMesh;
 
@@ -308,13 +310,13 @@ impl<T: Real> ShellSurface<T> {
         let mut best = None;
         traverse_cells(
             self.prisms.roots(tri),
-            prism,
-            ray,
-            T::ONE,
-            t_min,
+            uv_in_cells(prism, T::ONE),
             t_max,
             stats,
-            |_, _, _| [h_lo, h_hi],
+            |level, x, y, t_max| {
+                let h = [h_lo, h_hi];
+                texture_box_entry(prism, ray, T::ONE, (level, x, y), h, t_min, t_max)
+            },
             |x, y, t_max, stats| {
                 let mut t = t_max;
                 self.intersect_tile(tri, prism, ray, x, y, t_min, &mut t, &mut best, stats);

@@ -30,6 +30,16 @@ enum Precision {
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
+enum MethodKind {
+    /// Nonlinear ray tracing (Ogaki 2023).
+    Nonlinear,
+    /// Tessellation-free displacement mapping (Thonat et al. 2021); height fields only.
+    TessellationFree,
+    /// The pre-tessellated reference (f64).
+    Tessellated,
+}
+
+#[derive(Clone, Copy, Debug, ValueEnum)]
 enum SceneSize {
     /// The paper's map sizes (4096^2; fur 256^2 tiled 8 x 8). The pre-tessellated reference
     /// then needs several GB.
@@ -48,6 +58,13 @@ impl From<SceneSize> for Size {
 }
 
 /// Image size `WxH`.
+fn parse_method(s: &str) -> Result<Method, String> {
+    Method::from_slug(s).ok_or_else(|| {
+        let names: Vec<&str> = Method::ALL.iter().map(|m| m.slug()).collect();
+        format!("unknown method '{s}' (methods: {})", names.join(", "))
+    })
+}
+
 fn parse_size(s: &str) -> Result<(usize, usize), String> {
     let (w, h) = s
         .split_once(['x', 'X'])
@@ -95,9 +112,12 @@ enum Command {
         /// A built-in scene (mountain, cylinder, fur, torus, scales, cornell) or a scene file
         /// (`*.toml`, see the README).
         scene: String,
-        /// Precision of the intersection.
+        /// Precision of the intersection (the pre-tessellated reference is always f64).
         #[arg(long, value_enum, default_value = "f32")]
         precision: Precision,
+        /// Intersection method.
+        #[arg(long, value_enum, default_value = "nonlinear")]
+        method: MethodKind,
         #[command(flatten)]
         args: RenderArgs,
         /// Output PNG.
@@ -114,6 +134,10 @@ enum Command {
         /// Leave out the pre-tessellated reference (its build dominates at paper sizes).
         #[arg(long)]
         no_reference: bool,
+        /// Only these methods (comma-separated: nonlinear-f32, nonlinear-f64,
+        /// tessellation-free-f32, tessellation-free-f64, tessellated-f64; default: all).
+        #[arg(long, value_delimiter = ',', value_parser = parse_method)]
+        methods: Vec<Method>,
     },
     /// The full report: every scene and method, images, differences, and the solver table.
     Report {
@@ -138,10 +162,13 @@ enum Command {
         /// Precision (default: both).
         #[arg(long, value_enum)]
         precision: Option<Precision>,
+        /// Method (default: nonlinear and tessellation-free).
+        #[arg(long, value_enum)]
+        method: Option<MethodKind>,
         /// Map sizes of the built-in scenes.
         #[arg(long, value_enum, default_value = "small")]
         scene_size: SceneSize,
-        /// Directory for the leak images (`<scene>-leaks-<precision>.png`).
+        /// Directory for the leak images (`<scene>-leaks-<method>.png`).
         #[arg(short, long)]
         output: Option<PathBuf>,
     },
@@ -219,24 +246,21 @@ fn report_command(output: PathBuf, args: &RenderArgs, solver_samples: usize) -> 
     };
     eprintln!("watertightness...");
     let mut leaks_md = String::from(
-        "| scene | precision | rays | decided | leaks | rate | 95% interval |\n|---|---|---|---|---|---|---|\n",
+        "| scene | method | rays | decided | leaks | rate | 95% interval |\n|---|---|---|---|---|---|---|\n",
     );
     for name in scenes::WATERTIGHT_SCENES {
         let Some(scene) = scenes::builtin(name, args.scene_size.into()) else {
             continue;
         };
-        for result in [
-            watertight::measure::<f32>(&scene, 256),
-            watertight::measure::<f64>(&scene, 256),
-        ] {
-            let r = match result {
+        for method in watertight::METHODS {
+            let r = match watertight::measure(&scene, 256, method) {
                 Ok(r) => r,
                 Err(e) => return fail("report", e),
             };
             let (lo, hi) = r.wilson_95();
             leaks_md.push_str(&format!(
                 "| {name} | {} | {} | {} | {} | {:.2e} | [{:.1e}, {:.1e}] |\n",
-                r.precision,
+                r.method,
                 r.rays,
                 r.decided,
                 r.leaks,
@@ -244,7 +268,7 @@ fn report_command(output: PathBuf, args: &RenderArgs, solver_samples: usize) -> 
                 lo,
                 hi
             ));
-            let path = output.join(format!("{name}-leaks-{}.png", r.precision));
+            let path = output.join(format!("{name}-leaks-{}.png", r.method.slug()));
             if let Err(e) =
                 nlrt_render::trace::write_png(&path, 256, 256, &watertight::leak_image(&r))
             {
@@ -262,7 +286,7 @@ fn report_command(output: PathBuf, args: &RenderArgs, solver_samples: usize) -> 
         "# nlrt report\n\nWritten by `nlrt report` in {:.0} s.\n\n{scenes_md}\n## Watertightness\n\n\
          Camera rays that reach a base triangle from outside, decided exactly (GMP rationals), \
          and whether the tracer hit the surface before (`nlrt watertight`; leak images \
-         `<scene>-leaks-<precision>.png`: grey hit, red leak, black undecided).\n\n{leaks_md}\n## Cubic solvers\n\n{solver_md}",
+         `<scene>-leaks-<method>.png`: grey hit, red leak, black undecided).\n\n{leaks_md}\n## Cubic solvers\n\n{solver_md}",
         start.elapsed().as_secs_f64()
     );
     let path = output.join("report.md");
@@ -290,6 +314,7 @@ fn main() -> ExitCode {
         Command::Render {
             scene,
             precision,
+            method,
             args,
             output,
         } => {
@@ -297,10 +322,19 @@ fn main() -> ExitCode {
                 Ok(s) => s,
                 Err(e) => return fail("render", e),
             };
-            let method = match precision {
-                Precision::F32 => Method::NonlinearF32,
-                Precision::F64 => Method::NonlinearF64,
+            let method = match (method, precision) {
+                (MethodKind::Nonlinear, Precision::F32) => Method::NonlinearF32,
+                (MethodKind::Nonlinear, Precision::F64) => Method::NonlinearF64,
+                (MethodKind::TessellationFree, Precision::F32) => Method::AffineF32,
+                (MethodKind::TessellationFree, Precision::F64) => Method::AffineF64,
+                (MethodKind::Tessellated, _) => Method::Tessellated,
             };
+            if !method.supports(&built) {
+                return fail(
+                    "render",
+                    format!("{method} renders height fields only; {scene} is shell-mapped"),
+                );
+            }
             let opts = ReportOptions {
                 scenes: vec![scene.clone()],
                 size: args.scene_size.into(),
@@ -332,6 +366,7 @@ fn main() -> ExitCode {
             scenes,
             args,
             no_reference,
+            methods,
         } => {
             let scenes = if scenes.is_empty() {
                 SCENE_NAMES.iter().map(|s| s.to_string()).collect()
@@ -343,6 +378,7 @@ fn main() -> ExitCode {
             }
             let methods = Method::ALL
                 .into_iter()
+                .filter(|m| methods.is_empty() || methods.contains(m))
                 .filter(|&m| !(no_reference && m == Method::Tessellated))
                 .collect();
             let opts = ReportOptions {
@@ -389,6 +425,7 @@ fn main() -> ExitCode {
             scene,
             rays,
             precision,
+            method,
             scene_size,
             output,
         } => {
@@ -407,27 +444,35 @@ fn main() -> ExitCode {
                 return fail("watertight", "unknown scene");
             };
             let side = ((rays as f64).sqrt().ceil() as usize).max(1);
-            let precisions = match precision {
-                Some(p) => vec![p],
-                None => vec![Precision::F32, Precision::F64],
-            };
-            println!(
-                "| scene | precision | rays | decided | leaks | rate | 95% interval | seconds |"
-            );
-            println!("|---|---|---|---|---|---|---|---|");
-            for p in precisions {
-                let result = match p {
-                    Precision::F32 => watertight::measure::<f32>(&built, side),
-                    Precision::F64 => watertight::measure::<f64>(&built, side),
+            let methods = watertight::METHODS.into_iter().filter(|m| {
+                let precision_ok = match precision {
+                    Some(Precision::F32) => matches!(m, Method::NonlinearF32 | Method::AffineF32),
+                    Some(Precision::F64) => matches!(m, Method::NonlinearF64 | Method::AffineF64),
+                    None => true,
                 };
-                let r = match result {
+                let method_ok = match method {
+                    Some(MethodKind::Nonlinear) => {
+                        matches!(m, Method::NonlinearF32 | Method::NonlinearF64)
+                    }
+                    Some(MethodKind::TessellationFree) => {
+                        matches!(m, Method::AffineF32 | Method::AffineF64)
+                    }
+                    Some(MethodKind::Tessellated) => false,
+                    None => true,
+                };
+                precision_ok && method_ok
+            });
+            println!("| scene | method | rays | decided | leaks | rate | 95% interval | seconds |");
+            println!("|---|---|---|---|---|---|---|---|");
+            for m in methods {
+                let r = match watertight::measure(&built, side, m) {
                     Ok(r) => r,
                     Err(e) => return fail("watertight", e),
                 };
                 let (lo, hi) = r.wilson_95();
                 println!(
                     "| {scene} | {} | {} | {} | {} | {:.2e} | [{:.1e}, {:.1e}] | {:.1} |",
-                    r.precision,
+                    r.method,
                     r.rays,
                     r.decided,
                     r.leaks,
@@ -437,7 +482,7 @@ fn main() -> ExitCode {
                     r.seconds
                 );
                 if let Some(dir) = &output {
-                    let path = dir.join(format!("{scene}-leaks-{}.png", r.precision));
+                    let path = dir.join(format!("{scene}-leaks-{}.png", r.method.slug()));
                     if let Err(e) = std::fs::create_dir_all(dir).and_then(|()| {
                         nlrt_render::trace::write_png(
                             &path,

@@ -3,8 +3,7 @@
 //! mismatches and depth error of the primary rays), with images.
 
 use crate::scenes::{self, Scene, Size};
-use crate::tessellate::Tessellated;
-use crate::trace::{Frame, Method, Nonlinear, RenderOptions, Tracer, render, write_png};
+use crate::trace::{Frame, Method, RenderOptions, Tracer, render, write_png};
 use std::fmt::Write as _;
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -130,15 +129,11 @@ fn progress_printer(label: String, rows: usize) -> impl Fn(usize) + Sync {
     }
 }
 
-/// Builds `method`'s tracer for `scene`, timed.
-fn build(scene: &Scene, method: Method) -> (Box<dyn Tracer>, f64) {
+/// Builds `method`'s tracer for `scene`, timed; `None` when the method does not support it.
+fn build(scene: &Scene, method: Method) -> Option<(Box<dyn Tracer>, f64)> {
     let start = Instant::now();
-    let tracer: Box<dyn Tracer> = match method {
-        Method::NonlinearF32 => Box::new(Nonlinear::<f32>::new(scene)),
-        Method::NonlinearF64 => Box::new(Nonlinear::<f64>::new(scene)),
-        Method::Tessellated => Box::new(Tessellated::new(scene)),
-    };
-    (tracer, start.elapsed().as_secs_f64())
+    let tracer = method.build(scene)?;
+    Some((tracer, start.elapsed().as_secs_f64()))
 }
 
 /// Renders `scene` with every method of `opts`.
@@ -146,9 +141,10 @@ fn build(scene: &Scene, method: Method) -> (Box<dyn Tracer>, f64) {
 pub fn run_scene(scene: &Scene, opts: &ReportOptions) -> Vec<MethodRun> {
     opts.methods
         .iter()
+        .filter(|m| m.supports(scene))
         .map(|&method| {
             eprintln!("  {}: building {method}", scene.name);
-            let (tracer, init_seconds) = build(scene, method);
+            let (tracer, init_seconds) = build(scene, method).expect("supported method");
             let label = format!("{} {method}", scene.name);
             let frame = render(
                 scene,
@@ -229,6 +225,7 @@ pub fn run(opts: &ReportOptions) -> Result<String, String> {
         "|---|---|---|---|---|---|---|{}---|---|---|",
         if opts.scaling { "---|" } else { "" }
     );
+    let mut ran = Vec::new();
     for name in &opts.scenes {
         let Some(scene) = scenes::builtin(name, opts.size) else {
             return Err(format!(
@@ -242,6 +239,10 @@ pub fn run(opts: &ReportOptions) -> Result<String, String> {
             scene.content.describe()
         );
         let runs = run_scene(&scene, opts);
+        ran.push((
+            name.clone(),
+            runs.iter().map(|m| m.method).collect::<Vec<_>>(),
+        ));
         let reference = runs.iter().find(|m| m.method == Method::Tessellated);
         let nl64 = runs.iter().find(|m| m.method == Method::NonlinearF64);
         for m in &runs {
@@ -294,15 +295,13 @@ pub fn run(opts: &ReportOptions) -> Result<String, String> {
     }
     if let Some(dir) = &opts.out_dir {
         let _ = writeln!(md, "\n### Images\n");
-        for name in &opts.scenes {
-            let cells: Vec<String> = opts
-                .methods
+        for (name, methods) in &ran {
+            let cells: Vec<String> = methods
                 .iter()
                 .map(|m| format!("![{name} {m}]({name}-{}.png)", m.slug()))
                 .collect();
             let _ = writeln!(md, "{name}: {}\n", cells.join(" "));
-            let diffs: Vec<String> = opts
-                .methods
+            let diffs: Vec<String> = methods
                 .iter()
                 .filter(|&&m| m != Method::Tessellated)
                 .map(|m| {
@@ -312,7 +311,7 @@ pub fn run(opts: &ReportOptions) -> Result<String, String> {
                     )
                 })
                 .collect();
-            if opts.methods.contains(&Method::Tessellated) {
+            if methods.contains(&Method::Tessellated) {
                 let _ = writeln!(
                     md,
                     "{name} differences from the reference (x4; magenta: hit/miss mismatch): {}\n",

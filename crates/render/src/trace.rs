@@ -21,15 +21,22 @@ pub enum Method {
     NonlinearF32,
     /// Nonlinear ray tracing in double precision.
     NonlinearF64,
+    /// Tessellation-free displacement mapping (Thonat et al. 2021: world-space node boxes by
+    /// affine arithmetic, flat world microtriangles) in single precision; displacement only.
+    AffineF32,
+    /// Tessellation-free displacement mapping in double precision; displacement only.
+    AffineF64,
     /// Pre-tessellated microtriangles in a world-space BVH (f64): the reference.
     Tessellated,
 }
 
 impl Method {
     /// All methods, reference last.
-    pub const ALL: [Method; 3] = [
+    pub const ALL: [Method; 5] = [
         Method::NonlinearF32,
         Method::NonlinearF64,
+        Method::AffineF32,
+        Method::AffineF64,
         Method::Tessellated,
     ];
 
@@ -39,6 +46,8 @@ impl Method {
         match self {
             Method::NonlinearF32 => "nonlinear f32",
             Method::NonlinearF64 => "nonlinear f64",
+            Method::AffineF32 => "tessellation-free f32",
+            Method::AffineF64 => "tessellation-free f64",
             Method::Tessellated => "pre-tessellated f64",
         }
     }
@@ -49,8 +58,43 @@ impl Method {
         match self {
             Method::NonlinearF32 => "nonlinear-f32",
             Method::NonlinearF64 => "nonlinear-f64",
+            Method::AffineF32 => "tessellation-free-f32",
+            Method::AffineF64 => "tessellation-free-f64",
             Method::Tessellated => "tessellated-f64",
         }
+    }
+
+    /// The method named `slug` (as [`Method::slug`] writes it).
+    #[must_use]
+    pub fn from_slug(slug: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|m| m.slug() == slug)
+    }
+
+    /// Whether the method can render `scene` (tessellation-free mapping handles height
+    /// fields only, not instanced objects).
+    #[must_use]
+    pub fn supports(self, scene: &Scene) -> bool {
+        match self {
+            Method::AffineF32 | Method::AffineF64 => {
+                matches!(scene.content, Content::Displacement(_))
+            }
+            _ => true,
+        }
+    }
+
+    /// Builds the method's acceleration data for `scene`; `None` when it does not support it.
+    #[must_use]
+    pub fn build(self, scene: &Scene) -> Option<Box<dyn Tracer>> {
+        if !self.supports(scene) {
+            return None;
+        }
+        Some(match self {
+            Method::NonlinearF32 => Box::new(Nonlinear::<f32>::new(scene)),
+            Method::NonlinearF64 => Box::new(Nonlinear::<f64>::new(scene)),
+            Method::AffineF32 => Box::new(TessellationFree::<f32>::new(scene)?),
+            Method::AffineF64 => Box::new(TessellationFree::<f64>::new(scene)?),
+            Method::Tessellated => Box::new(Tessellated::new(scene)),
+        })
     }
 }
 
@@ -138,6 +182,44 @@ impl<T: Real> Tracer for Nonlinear<T> {
             Self::Displaced(s) => s.memory_bytes(),
             Self::Shell(s) => s.memory_bytes(),
         }
+    }
+}
+
+/// Tessellation-free displacement mapping (Thonat et al. 2021) in precision `T`, on the same
+/// acceleration data as nonlinear tracing ([`DisplacedSurface::intersect_affine`]).
+pub struct TessellationFree<T: Real>(DisplacedSurface<T>);
+
+impl<T: Real> TessellationFree<T> {
+    /// Builds the surface; `None` for scenes that are not height fields.
+    #[must_use]
+    pub fn new(scene: &Scene) -> Option<Self> {
+        match Nonlinear::<T>::new(scene) {
+            Nonlinear::Displaced(s) => Some(Self(s)),
+            Nonlinear::Shell(_) => None,
+        }
+    }
+}
+
+impl<T: Real> Tracer for TessellationFree<T> {
+    fn intersect(&self, origin: DVec3, dir: DVec3, t_min: f64, t_max: f64) -> Option<(f64, DVec3)> {
+        let v = |a: DVec3| T::Vec3::new(T::from_f64(a.x), T::from_f64(a.y), T::from_f64(a.z));
+        let ray = Ray::new(v(origin), v(dir))?;
+        let t_max = if t_max.is_finite() {
+            T::from_f64(t_max)
+        } else {
+            T::INFINITY
+        };
+        let mut stats = TraversalStats::default();
+        let hit = self
+            .0
+            .intersect_affine(&ray, T::from_f64(t_min), t_max, &mut stats)?;
+        let n = DisplacedSurface::affine_normal(&hit, ray.dir)?;
+        let n = DVec3::new(n.x().to_f64(), n.y().to_f64(), n.z().to_f64());
+        Some((hit.t.to_f64(), n))
+    }
+
+    fn memory_bytes(&self) -> usize {
+        self.0.memory_bytes()
     }
 }
 

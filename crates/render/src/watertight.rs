@@ -15,7 +15,7 @@
 //! need not cover the base.
 
 use crate::scenes::{Content, Scene};
-use crate::trace::Nonlinear;
+use crate::trace::{Method, Nonlinear};
 use nlrt_accel::{Aabb, Bvh4, SlabRay, TraversalStats};
 use nlrt_oracle::crossing::ray_triangle;
 use nlrt_poly::glam::DVec3;
@@ -29,6 +29,14 @@ use rayon::prelude::*;
 /// hit is the crossing itself. 1e-4 is 250x that, and below the smallest displacement
 /// feature relative to the viewing distance (a texel of the maps here is ~ 1e-3 of it).
 pub const LEAK_TOLERANCE: f64 = 1e-4;
+
+/// The methods whose leaks are measured, in report order.
+pub const METHODS: [Method; 4] = [
+    Method::NonlinearF32,
+    Method::NonlinearF64,
+    Method::AffineF32,
+    Method::AffineF64,
+];
 
 /// The outcome for one ray.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -44,8 +52,8 @@ pub enum Verdict {
 /// Leak counts of one precision on one scene.
 #[derive(Clone, Debug)]
 pub struct LeakReport {
-    /// Precision name.
-    pub precision: &'static str,
+    /// The tracing method measured.
+    pub method: Method,
     /// Rays cast.
     pub rays: usize,
     /// Rays that reach a base triangle from outside (decided by the oracle).
@@ -131,11 +139,29 @@ fn to_f64<T: Real>(v: T::Vec3) -> [f64; 3] {
     [v.x().to_f64(), v.y().to_f64(), v.z().to_f64()]
 }
 
-/// Runs `rays_side x rays_side` camera rays (pixel centres) through `scene` in precision `T`.
+/// Runs `rays_side x rays_side` camera rays (pixel centres) through `scene` with `method`
+/// (nonlinear tracing or tessellation-free mapping, in either precision).
 ///
 /// # Errors
-/// A scene that is not a displacement scene.
-pub fn measure<T: Real>(scene: &Scene, rays_side: usize) -> Result<LeakReport, String> {
+/// A scene that is not a displacement scene, or the pre-tessellated reference (its f64
+/// triangles are not the surface the oracle's criterion is stated for).
+pub fn measure(scene: &Scene, rays_side: usize, method: Method) -> Result<LeakReport, String> {
+    match method {
+        Method::NonlinearF32 => measure_in::<f32>(scene, rays_side, method),
+        Method::NonlinearF64 => measure_in::<f64>(scene, rays_side, method),
+        Method::AffineF32 => measure_in::<f32>(scene, rays_side, method),
+        Method::AffineF64 => measure_in::<f64>(scene, rays_side, method),
+        Method::Tessellated => Err(format!(
+            "{method}: watertightness is measured for nonlinear and tessellation-free tracing"
+        )),
+    }
+}
+
+fn measure_in<T: Real>(
+    scene: &Scene,
+    rays_side: usize,
+    method: Method,
+) -> Result<LeakReport, String> {
     if !matches!(scene.content, Content::Displacement(_)) {
         return Err(format!(
             "scene '{}' is shell-mapped; watertightness is measured on displacement scenes",
@@ -143,6 +169,7 @@ pub fn measure<T: Real>(scene: &Scene, rays_side: usize) -> Result<LeakReport, S
         ));
     }
     let start = std::time::Instant::now();
+    let affine = matches!(method, Method::AffineF32 | Method::AffineF64);
     let tracer = Nonlinear::<T>::new(scene);
     let Nonlinear::Displaced(surface) = &tracer else {
         unreachable!("displacement scene")
@@ -214,20 +241,23 @@ pub fn measure<T: Real>(scene: &Scene, rays_side: usize) -> Result<LeakReport, S
             if !closed && !top.is_some_and(|t| t <= t_base) {
                 return Verdict::NotDecided;
             }
-            let hit = surface.intersect(&ray, T::ZERO, T::INFINITY, &mut TraversalStats::default());
+            let mut stats = TraversalStats::default();
+            let hit = if affine {
+                surface
+                    .intersect_affine(&ray, T::ZERO, T::INFINITY, &mut stats)
+                    .map(|h| (h.t, h.triangle, h.texel, h.part, T::NAN))
+            } else {
+                surface
+                    .intersect(&ray, T::ZERO, T::INFINITY, &mut stats)
+                    .map(|h| (h.hit.t, h.triangle, h.texel, h.part, h.hit.h))
+            };
             match hit {
-                Some(h) if h.hit.t.to_f64() <= t_base * (1.0 + LEAK_TOLERANCE) => Verdict::Hit,
+                Some(h) if h.0.to_f64() <= t_base * (1.0 + LEAK_TOLERANCE) => Verdict::Hit,
                 _ => {
                     if std::env::var_os("NLRT_SHOW_LEAKS").is_some() {
                         eprintln!(
-                            "leak at pixel ({x}, {y}): base crossing t = {t_base}, tracer {:?}",
-                            hit.map(|h| (
-                                h.hit.t.to_f64(),
-                                h.triangle,
-                                h.texel,
-                                h.part,
-                                h.hit.h.to_f64()
-                            ))
+                            "{method} leak at pixel ({x}, {y}): base crossing t = {t_base}, tracer {:?}",
+                            hit.map(|h| (h.0.to_f64(), h.1, h.2, h.3, h.4.to_f64()))
                         );
                     }
                     Verdict::Leak
@@ -241,7 +271,7 @@ pub fn measure<T: Real>(scene: &Scene, rays_side: usize) -> Result<LeakReport, S
         .count();
     let leaks = verdicts.iter().filter(|v| **v == Verdict::Leak).count();
     Ok(LeakReport {
-        precision: T::NAME,
+        method,
         rays: n * n,
         decided,
         leaks,

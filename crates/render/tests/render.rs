@@ -4,7 +4,7 @@
 use nlrt_render::report::compare;
 use nlrt_render::scenes;
 use nlrt_render::tessellate::Tessellated;
-use nlrt_render::trace::{Nonlinear, RenderOptions, render};
+use nlrt_render::trace::{Method, Nonlinear, RenderOptions, render};
 use std::process::Command;
 
 fn small() -> RenderOptions {
@@ -149,15 +149,15 @@ fn torus_is_watertight() {
     use nlrt_render::watertight::measure;
     let scene = scenes::torus_scene(64);
     for report in [
-        measure::<f64>(&scene, 256).unwrap(),
-        measure::<f32>(&scene, 256).unwrap(),
+        measure(&scene, 256, Method::NonlinearF64).unwrap(),
+        measure(&scene, 256, Method::NonlinearF32).unwrap(),
     ] {
         assert!(
             report.decided > 20_000,
             "most rays should be decided: {}",
             report.decided
         );
-        assert_eq!(report.leaks, 0, "{} leaks on the torus", report.precision);
+        assert_eq!(report.leaks, 0, "{} leaks on the torus", report.method);
     }
 }
 
@@ -171,19 +171,15 @@ fn mountain_at_grazing_angles_is_watertight() {
     scene.camera.eye = DVec3::new(0.0, 0.4, 0.95);
     scene.camera.target = DVec3::new(0.0, 0.25, -1.0);
     for report in [
-        measure::<f64>(&scene, 256).unwrap(),
-        measure::<f32>(&scene, 256).unwrap(),
+        measure(&scene, 256, Method::NonlinearF64).unwrap(),
+        measure(&scene, 256, Method::NonlinearF32).unwrap(),
     ] {
         assert!(
             report.decided > 5_000,
             "rays should reach the base: {}",
             report.decided
         );
-        assert_eq!(
-            report.leaks, 0,
-            "{} leaks on the mountain",
-            report.precision
-        );
+        assert_eq!(report.leaks, 0, "{} leaks on the mountain", report.method);
     }
 }
 
