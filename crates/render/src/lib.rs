@@ -8,6 +8,8 @@
 // `!(a > b)` is deliberate: it is true when either side is NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+pub mod edit;
+pub mod plot;
 pub mod report;
 pub mod scene_file;
 pub mod scenes;

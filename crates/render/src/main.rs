@@ -6,9 +6,9 @@
 use clap::{Parser, Subcommand, ValueEnum};
 use nlrt_render::report::{self, ReportOptions};
 use nlrt_render::scenes::{self, SCENE_NAMES, Size};
-use nlrt_render::solvers;
 use nlrt_render::trace::{Method, RenderOptions};
 use nlrt_render::watertight;
+use nlrt_render::{edit, solvers};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -172,6 +172,22 @@ enum Command {
         #[arg(short, long)]
         output: Option<PathBuf>,
     },
+    /// Time from a brush stroke on the mountain's height map to the next traceable frame:
+    /// partial min-max update, full rebuild, re-tessellation.
+    Edit {
+        /// Map size (small: 1024^2, paper: 4096^2).
+        #[arg(long, value_enum, default_value = "small")]
+        scene_size: SceneSize,
+        /// Strokes timed.
+        #[arg(long, default_value_t = 200, value_parser = clap::value_parser!(u64).range(1..=100_000))]
+        strokes: u64,
+        /// Brush side in samples.
+        #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u64).range(1..=4096))]
+        brush: u64,
+        /// Skip the pre-tessellated rebuild (at paper size it needs several GB).
+        #[arg(long)]
+        no_reference: bool,
+    },
     /// Write a built-in scene as a scene file (TOML + OBJ + 16-bit PNG or object OBJ).
     Export {
         /// Built-in scene name.
@@ -276,6 +292,14 @@ fn report_command(output: PathBuf, args: &RenderArgs, solver_samples: usize) -> 
             }
         }
     }
+    eprintln!("editing...");
+    let edit_md = match edit::run(&edit::EditOptions {
+        size: args.scene_size.into(),
+        ..edit::EditOptions::default()
+    }) {
+        Ok(r) => edit::markdown(&r),
+        Err(e) => return fail("report", e),
+    };
     eprintln!("solver table ({solver_samples} cubics per precision)...");
     let solver_opts = solvers::Options {
         samples: solver_samples.max(1),
@@ -286,7 +310,7 @@ fn report_command(output: PathBuf, args: &RenderArgs, solver_samples: usize) -> 
         "# nlrt report\n\nWritten by `nlrt report` in {:.0} s.\n\n{scenes_md}\n## Watertightness\n\n\
          Camera rays that reach a base triangle from outside, decided exactly (GMP rationals), \
          and whether the tracer hit the surface before (`nlrt watertight`; leak images \
-         `<scene>-leaks-<method>.png`: grey hit, red leak, black undecided).\n\n{leaks_md}\n## Cubic solvers\n\n{solver_md}",
+         `<scene>-leaks-<method>.png`: grey hit, red leak, black undecided).\n\n{leaks_md}\n## Editing (`nlrt edit`)\n\n{edit_md}\n## Cubic solvers\n\n{solver_md}",
         start.elapsed().as_secs_f64()
     );
     let path = output.join("report.md");
@@ -402,6 +426,26 @@ fn main() -> ExitCode {
             args,
             solver_samples,
         } => report_command(output, &args, solver_samples),
+        Command::Edit {
+            scene_size,
+            strokes,
+            brush,
+            no_reference,
+        } => {
+            let opts = edit::EditOptions {
+                size: scene_size.into(),
+                strokes: strokes as usize,
+                brush: brush as usize,
+                reference: !no_reference,
+            };
+            match edit::run(&opts) {
+                Ok(r) => {
+                    print!("{}", edit::markdown(&r));
+                    ExitCode::SUCCESS
+                }
+                Err(e) => fail("edit", e),
+            }
+        }
         Command::Export {
             scene,
             scene_size,

@@ -190,6 +190,53 @@ fn difference_image(a: &Frame, b: &Frame) -> Vec<u8> {
     out
 }
 
+/// The speed-against-error figure: one colour per method, one point per scene.
+fn speed_against_error_svg(points: &[(Method, String, f64, ErrorStats)]) -> String {
+    use crate::plot::{Panel, Point, Series};
+    let color = |m: Method| match m {
+        Method::NonlinearF32 => "#d62728",
+        Method::NonlinearF64 => "#ff9896",
+        Method::AffineF32 => "#1f77b4",
+        Method::AffineF64 => "#aec7e8",
+        Method::Tessellated => "#2ca02c",
+    };
+    let series = |metric: &dyn Fn(&ErrorStats) -> f64| -> Vec<Series> {
+        Method::ALL
+            .into_iter()
+            .filter(|m| points.iter().any(|p| p.0 == *m))
+            .map(|m| Series {
+                name: m.name().to_string(),
+                color: color(m),
+                points: points
+                    .iter()
+                    .filter(|p| p.0 == m)
+                    .map(|p| Point {
+                        x: p.2,
+                        y: metric(&p.3),
+                        label: p.1.clone(),
+                    })
+                    .collect(),
+            })
+            .collect()
+    };
+    crate::plot::svg(&[
+        Panel {
+            title: "depth error vs reference".into(),
+            x_label: "Mrays/s (all rays)".into(),
+            y_label: "relative depth error, p99".into(),
+            y_floor: 1e-17,
+            series: series(&|e| e.depth_p99),
+        },
+        Panel {
+            title: "hit/miss mismatches vs reference".into(),
+            x_label: "Mrays/s (all rays)".into(),
+            y_label: "mismatch rate".into(),
+            y_floor: 1e-6,
+            series: series(&|e| e.mismatch_rate()),
+        },
+    ])
+}
+
 /// Runs every scene and writes images (when `out_dir` is set); returns the Markdown tables.
 ///
 /// # Errors
@@ -226,6 +273,7 @@ pub fn run(opts: &ReportOptions) -> Result<String, String> {
         if opts.scaling { "---|" } else { "" }
     );
     let mut ran = Vec::new();
+    let mut points = Vec::new();
     for name in &opts.scenes {
         let Some(scene) = scenes::builtin(name, opts.size) else {
             return Err(format!(
@@ -248,6 +296,9 @@ pub fn run(opts: &ReportOptions) -> Result<String, String> {
         for m in &runs {
             let vs = |other: Option<&MethodRun>| other.map(|o| compare(&m.frame, &o.frame));
             let (e_ref, e_64) = (vs(reference), vs(nl64));
+            if let Some(e) = e_ref {
+                points.push((m.method, name.clone(), m.all_mrays(), e));
+            }
             let fmt_rate = |e: Option<ErrorStats>| {
                 e.map_or("-".into(), |e| {
                     format!("{:.4}% ({})", 100.0 * e.mismatch_rate(), e.mismatches)
@@ -292,6 +343,20 @@ pub fn run(opts: &ReportOptions) -> Result<String, String> {
                 }
             }
         }
+    }
+    if let Some(dir) = &opts.out_dir
+        && !points.is_empty()
+    {
+        let path = dir.join("speed-vs-error.svg");
+        std::fs::write(&path, speed_against_error_svg(&points))
+            .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+        let _ = writeln!(
+            md,
+            "\n### Speed against error\n\nEvery scene and method: all rays per second (log) against the \
+             error of the primary rays versus the f64 pre-tessellated reference (left: 99th percentile \
+             of the relative depth difference; right: hit/miss mismatch rate; zeros on the floor \
+             line).\n\n![speed against error](speed-vs-error.svg)\n"
+        );
     }
     if let Some(dir) = &opts.out_dir {
         let _ = writeln!(md, "\n### Images\n");

@@ -215,3 +215,24 @@ fn fig9_degenerate_columns_render_alike_in_both_precisions() {
     eprintln!("fig9 f32 vs f64: {e:?}");
     assert!(e.mismatches <= 3, "{e:?}");
 }
+
+#[test]
+fn partial_pyramid_updates_after_brush_strokes_trace_like_a_fresh_build() {
+    use nlrt_render::edit::{EditOptions, run};
+    let report = run(&EditOptions {
+        strokes: 60,
+        brush: 96,
+        reference: false,
+        ..EditOptions::default()
+    })
+    .unwrap();
+    assert_eq!(report.verified_rays, 128 * 128);
+    assert_eq!(report.verify_mismatches, 0);
+    assert!(
+        run(&EditOptions {
+            strokes: 0,
+            ..EditOptions::default()
+        })
+        .is_err()
+    );
+}
