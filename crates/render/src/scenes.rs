@@ -91,7 +91,13 @@ pub const SCENE_NAMES: [&str; 7] = [
 
 /// Scenes `nlrt watertight` measures by default (displacement scenes whose rays can be
 /// decided: closed meshes, or the mountain's convex shell).
-pub const WATERTIGHT_SCENES: [&str; 4] = ["torus", "fur", "mountain", "mountain-grazing"];
+pub const WATERTIGHT_SCENES: [&str; 5] = [
+    "torus",
+    "fur",
+    "mountain",
+    "mountain-grazing",
+    "fig9-displaced",
+];
 
 /// Sizes of a built-in scene: the paper's, or reduced for quick runs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -122,6 +128,7 @@ pub fn builtin(name: &str, size: Size) -> Option<Scene> {
         }
         "scales" => Some(scales()),
         "fig9" => Some(fig9()),
+        "fig9-displaced" => Some(fig9_displaced(if big { 1024 } else { 256 })),
         "cornell" => Some(cornell(if big { 15 } else { 6 })),
         _ => None,
     }
@@ -600,4 +607,44 @@ pub fn fig9() -> Scene {
         },
         sun: DVec3::new(0.3, 0.8, 0.5).normalize(),
     }
+}
+
+/// Fig. 9's seven columns (regular; uv-degenerate to a line and to a point; prisms pinching
+/// to a line and to a point; a triangle degenerate in world and uv; in world only) displaced by
+/// an fBm map instead of shell-mapped by an object, for the watertightness measurement: the
+/// map is clamped and fades to exactly zero on its border (a `sin(pi u) sin(pi v)` window), so
+/// a ray can get under the surface of the pinched columns only through it.
+#[must_use]
+pub fn fig9_displaced(side: usize) -> Scene {
+    let noise = fbm_map(side, 4, 6, 23);
+    let last = (side - 1) as f64;
+    let heights: Vec<f32> = noise
+        .iter()
+        .enumerate()
+        .map(|(k, &h)| {
+            let (i, j) = ((k % side) as f64, (k / side) as f64);
+            let window =
+                (std::f64::consts::PI * i / last).sin() * (std::f64::consts::PI * j / last).sin();
+            // sin(pi) is 1.2e-16, not 0: the border is set to zero exactly.
+            let on_border = i == 0.0 || j == 0.0 || i == last || j == last;
+            if on_border {
+                0.0
+            } else {
+                (f64::from(h) * window).max(0.0) as f32
+            }
+        })
+        .collect();
+    let mut scene = fig9();
+    scene.name = "fig9-displaced";
+    scene.content = Content::Displacement(
+        HeightField::from_unit_heights(side, &heights, Wrap::Clamp).expect("power-of-two side"),
+    );
+    scene.height_scale = 0.4;
+    // All seven columns in a square view (the watertightness grid is square).
+    scene.camera = Camera {
+        eye: DVec3::new(0.5, 5.0, 7.0),
+        target: DVec3::new(0.5, 0.0, 0.0),
+        fov_degrees: 60.0,
+    };
+    scene
 }

@@ -6,9 +6,14 @@
 //! closed object layer... see below) lies on or above the base: a ray from outside that
 //! reaches the base must have crossed it. The base crossing is computed with GMP rationals
 //! ([`nlrt_oracle::crossing`]) on exactly the values the tracer sees (its precision's mesh and
-//! ray), so the verdict does not depend on floating point. For open meshes (the mountain) the
-//! ray must also cross the top cap from outside before the base (the shell is then a convex
-//! slab, so the ray stays inside it); closed meshes (tori) have no other way in.
+//! ray), so the verdict does not depend on floating point. Where a piece of the mesh has
+//! boundary edges (the mountain, Fig. 9's columns) a ray could enter under the surface through
+//! a side wall, so it must also cross a top cap from outside before the base (the shell is
+//! then a convex slab, so the ray stays inside it), unless the height map is zero all along
+//! those edges (Fig. 9's displaced columns: a clamped map with a zero border), which leaves
+//! no way under the surface but through it; closed meshes (tori) have no other way in. Rays
+//! reaching a piece of mesh with a uv or normal seam are not judged: the surface itself is
+//! cracked there (Fig. 9's point-degenerate column has one by construction).
 //!
 //! This finds misses and hits beyond the base; a hit that is too far but still above the base
 //! is not detected (a lower bound on leaks). `NLRT_SHOW_LEAKS=1` prints each leak. Displacement scenes only: a shell-mapped object
@@ -16,9 +21,9 @@
 
 use crate::scenes::{Content, Scene};
 use crate::trace::{Method, Nonlinear};
-use nlrt_accel::{Aabb, Bvh4, SlabRay, TraversalStats};
+use nlrt_accel::{Aabb, Bvh4, SlabRay, TraversalStats, Wrap};
 use nlrt_oracle::crossing::ray_triangle;
-use nlrt_poly::glam::DVec3;
+use nlrt_poly::glam::{DVec2, DVec3};
 use nlrt_poly::{Real, Vector3};
 use nlrt_shellmap::Ray;
 use rayon::prelude::*;
@@ -45,8 +50,9 @@ pub enum Verdict {
     NotDecided,
     /// Reaches the base and the tracer hit no farther than the crossing.
     Hit,
-    /// Reaches the base and the tracer missed or hit beyond the crossing.
-    Leak,
+    /// Reaches the base (of this base triangle) and the tracer missed or hit beyond the
+    /// crossing.
+    Leak(u32),
 }
 
 /// Leak counts of one precision on one scene.
@@ -91,23 +97,114 @@ impl LeakReport {
     }
 }
 
-/// Whether every edge of the mesh has two triangles (no boundary).
-fn is_closed(scene: &Scene) -> bool {
+/// How a ray reaching a base triangle from the front is judged.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Criterion {
+    /// Reaching the base from outside proves a crossing of the surface.
+    Base,
+    /// The ray must also have crossed a top cap from outside before the base.
+    TopCapFirst,
+    /// No verdict: the triangle's piece of surface has a seam (an edge whose two triangles
+    /// disagree on uvs or normals there), so the surface itself has a crack a ray may pass.
+    Seam,
+}
+
+/// Per base triangle, the [`Criterion`] for rays reaching it. Triangles sharing an edge (same
+/// positions, uvs and normals at both ends) form a piece whose surface is continuous. A piece
+/// without boundary edges (closed, like the tori) gets [`Criterion::Base`]: a ray from outside
+/// cannot get under the surface but through it. So does a piece whose boundary edges all lie
+/// where the height map is zero (along the uv square's border of a clamped map whose border
+/// samples are all 0, as in `fig9-displaced`): a ray entering through a side wall enters at or
+/// above the surface, and the difference between its height and the surface's changes sign (or
+/// touches zero) before the base. Other open pieces (the mountain) get
+/// [`Criterion::TopCapFirst`] (the shell is then a convex slab, the ray stays in it); pieces
+/// with a seam get [`Criterion::Seam`].
+fn criteria(scene: &Scene) -> Vec<Criterion> {
     use std::collections::HashMap;
     let key = |p: DVec3| (p.x.to_bits(), p.y.to_bits(), p.z.to_bits());
-    let mut edges: HashMap<_, u32> = HashMap::new();
-    for t in &scene.triangles {
+    // Per edge (by positions): its triangles, with the uvs and normals at its two ends in a
+    // canonical order.
+    type Ends = [(DVec2, DVec3); 2];
+    let mut edges: HashMap<_, Vec<(usize, usize, Ends)>> = HashMap::new();
+    for (i, t) in scene.triangles.iter().enumerate() {
         for k in 0..3 {
-            let (a, b) = (
-                key(scene.positions[t[k] as usize]),
-                key(scene.positions[t[(k + 1) % 3] as usize]),
-            );
-            *edges
-                .entry(if a < b { (a, b) } else { (b, a) })
-                .or_default() += 1;
+            let (va, vb) = (t[k] as usize, t[(k + 1) % 3] as usize);
+            let (a, b) = (key(scene.positions[va]), key(scene.positions[vb]));
+            let attributes = |v: usize| (scene.uvs[v] * scene.tiling, scene.normals[v]);
+            let (edge, ends) = if a < b {
+                ((a, b), [attributes(va), attributes(vb)])
+            } else {
+                ((b, a), [attributes(vb), attributes(va)])
+            };
+            edges.entry(edge).or_default().push((i, k, ends));
         }
     }
-    edges.values().all(|&c| c == 2)
+    // Two triangles agree on an edge when their normals are equal at both ends and their
+    // tiled uvs are equal, or (with a repeating map) differ by one whole number of tiles at
+    // both ends (the torus's u = 0 / u = 1 wrap).
+    let repeats = match &scene.content {
+        Content::Displacement(field) => field.wrap() == Wrap::Repeat,
+        Content::Shell(_) => true,
+    };
+    let agree = |a: &Ends, b: &Ends| {
+        let offset = a[0].0 - b[0].0;
+        let whole = offset == offset.round() && (repeats || offset == DVec2::ZERO);
+        a[0].1 == b[0].1 && a[1].1 == b[1].1 && whole && a[1].0 - b[1].0 == offset
+    };
+    // Pieces: triangles joined by edges they agree on, by union-find.
+    let mut parent: Vec<usize> = (0..scene.triangles.len()).collect();
+    fn root(parent: &mut [usize], mut i: usize) -> usize {
+        while parent[i] != i {
+            parent[i] = parent[parent[i]];
+            i = parent[i];
+        }
+        i
+    }
+    for users in edges.values() {
+        for w in users.windows(2) {
+            if agree(&w[0].2, &w[1].2) {
+                let (a, b) = (root(&mut parent, w[0].0), root(&mut parent, w[1].0));
+                parent[a] = b;
+            }
+        }
+    }
+    let zero_border = match &scene.content {
+        Content::Displacement(field) => {
+            let n = field.side() as i64;
+            field.wrap() == Wrap::Clamp
+                && (0..n).all(|i| {
+                    field.sample(i, 0) == 0
+                        && field.sample(i, n - 1) == 0
+                        && field.sample(0, i) == 0
+                        && field.sample(n - 1, i) == 0
+                })
+        }
+        Content::Shell(_) => false,
+    };
+    let on_zero_border = |tri: usize, k: usize| {
+        let t = scene.triangles[tri];
+        let (a, b) = (
+            scene.uvs[t[k] as usize] * scene.tiling,
+            scene.uvs[t[(k + 1) % 3] as usize] * scene.tiling,
+        );
+        let line = |x: f64, y: f64| (x == 0.0 && y == 0.0) || (x == 1.0 && y == 1.0);
+        zero_border && (line(a.x, b.x) || line(a.y, b.y))
+    };
+    let mut piece = vec![Criterion::Base; scene.triangles.len()];
+    for users in edges.values() {
+        let seam = users.windows(2).any(|w| !agree(&w[0].2, &w[1].2));
+        for &(tri, k, _) in users {
+            let r = root(&mut parent, tri);
+            if seam {
+                piece[r] = Criterion::Seam;
+            } else if users.len() == 1 && !on_zero_border(tri, k) && piece[r] == Criterion::Base {
+                piece[r] = Criterion::TopCapFirst;
+            }
+        }
+    }
+    (0..scene.triangles.len())
+        .map(|i| piece[root(&mut parent, i)])
+        .collect()
 }
 
 /// A float pre-filter for the exact test: `false` only when the f64 barycentric coordinates
@@ -174,7 +271,7 @@ fn measure_in<T: Real>(
     let Nonlinear::Displaced(surface) = &tracer else {
         unreachable!("displacement scene")
     };
-    let closed = is_closed(scene);
+    let criteria = criteria(scene);
     // Base and top-cap triangles exactly as the tracer's prisms have them.
     let mesh = surface.mesh();
     let caps: Vec<Caps> = (0..mesh.triangle_count())
@@ -214,7 +311,7 @@ fn measure_in<T: Real>(
             let (o, dir) = (to_f64::<T>(ray.origin), to_f64::<T>(ray.dir));
             // Nearest exact base crossing, and the nearest front top-cap crossing.
             let slab = SlabRay::new(DVec3::from(o), DVec3::from(dir));
-            let mut base: Option<(f64, bool)> = None;
+            let mut base: Option<(f64, bool, usize)> = None;
             let mut top: Option<f64> = None;
             bvh.traverse(&slab, 0.0, f64::INFINITY, |i, _| {
                 let (b, t, orient) = &caps[i as usize];
@@ -222,8 +319,8 @@ fn measure_in<T: Real>(
                     && let Some(c) = ray_triangle(o, dir, *b)
                 {
                     let front = c.from_front == (*orient > 0.0);
-                    if base.is_none_or(|(bt, _)| c.t < bt) {
-                        base = Some((c.t, front));
+                    if base.is_none_or(|(bt, _, _)| c.t < bt) {
+                        base = Some((c.t, front, i as usize));
                     }
                 }
                 if may_cross(o, dir, t)
@@ -235,10 +332,15 @@ fn measure_in<T: Real>(
                 }
                 None // visit every candidate
             });
-            let Some((t_base, true)) = base else {
+            let Some((t_base, true, base_triangle)) = base else {
                 return Verdict::NotDecided;
             };
-            if !closed && !top.is_some_and(|t| t <= t_base) {
+            let decided = match criteria[base_triangle] {
+                Criterion::Base => true,
+                Criterion::TopCapFirst => top.is_some_and(|t| t <= t_base),
+                Criterion::Seam => false,
+            };
+            if !decided {
                 return Verdict::NotDecided;
             }
             let mut stats = TraversalStats::default();
@@ -256,11 +358,11 @@ fn measure_in<T: Real>(
                 _ => {
                     if std::env::var_os("NLRT_SHOW_LEAKS").is_some() {
                         eprintln!(
-                            "{method} leak at pixel ({x}, {y}): base crossing t = {t_base}, tracer {:?}",
+                            "{method} leak at pixel ({x}, {y}): base triangle {base_triangle} crossed at t = {t_base}, tracer {:?}",
                             hit.map(|h| (h.0.to_f64(), h.1, h.2, h.3, h.4.to_f64()))
                         );
                     }
-                    Verdict::Leak
+                    Verdict::Leak(base_triangle as u32)
                 }
             }
         })
@@ -269,7 +371,10 @@ fn measure_in<T: Real>(
         .iter()
         .filter(|v| **v != Verdict::NotDecided)
         .count();
-    let leaks = verdicts.iter().filter(|v| **v == Verdict::Leak).count();
+    let leaks = verdicts
+        .iter()
+        .filter(|v| matches!(v, Verdict::Leak(_)))
+        .count();
     Ok(LeakReport {
         method,
         rays: n * n,
@@ -278,6 +383,20 @@ fn measure_in<T: Real>(
         verdicts,
         seconds: start.elapsed().as_secs_f64(),
     })
+}
+
+impl LeakReport {
+    /// The base triangles leaks reached, with their counts, by triangle.
+    #[must_use]
+    pub fn leaks_by_triangle(&self) -> Vec<(u32, usize)> {
+        let mut counts = std::collections::BTreeMap::new();
+        for v in &self.verdicts {
+            if let Verdict::Leak(t) = v {
+                *counts.entry(*t).or_insert(0) += 1;
+            }
+        }
+        counts.into_iter().collect()
+    }
 }
 
 /// A leak image like the paper's Fig. 8: decided rays grey, leaks red, undecided black.
@@ -289,7 +408,7 @@ pub fn leak_image(report: &LeakReport) -> Vec<u8> {
         .flat_map(|v| match v {
             Verdict::NotDecided => [0, 0, 0],
             Verdict::Hit => [150, 150, 150],
-            Verdict::Leak => [255, 0, 0],
+            Verdict::Leak(_) => [255, 0, 0],
         })
         .collect()
 }
