@@ -73,9 +73,42 @@ pub fn ray_triangle(o: [f64; 3], d: [f64; 3], tri: [[f64; 3]; 3]) -> Option<Cros
     })
 }
 
+/// Whether the triangle `a b c` has zero area exactly (its vertices are collinear or
+/// coincide), decided on the exact values; `false` for non-finite input.
+#[must_use]
+pub fn has_zero_area(tri: [[f64; 3]; 3]) -> bool {
+    if !tri.iter().flatten().all(|v| v.is_finite()) {
+        return false;
+    }
+    let [a, b, c] = tri.map(|p| p.map(q));
+    cross(&sub(&b, &a), &sub(&c, &a)).iter().all(|x| *x == 0)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn zero_area_is_exact() {
+        assert!(has_zero_area([[0.0; 3], [1.0, 2.0, 3.0], [0.5, 1.0, 1.5]]));
+        assert!(has_zero_area([[1.0; 3]; 3]));
+        // Off the line by one ulp, or by 1e-300: not zero.
+        assert!(!has_zero_area([
+            [0.0; 3],
+            [1.0, 2.0, 3.0],
+            [0.5, 1.0, 1.5f64.next_up()]
+        ]));
+        assert!(!has_zero_area([
+            [0.0; 3],
+            [1.0, 0.0, 0.0],
+            [0.5, 1e-300, 0.0]
+        ]));
+        assert!(!has_zero_area([
+            [f64::NAN; 3],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0]
+        ]));
+    }
 
     #[test]
     fn crossings_are_exact_on_edges_and_sides() {

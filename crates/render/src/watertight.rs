@@ -104,6 +104,8 @@ enum Criterion {
     Base,
     /// The ray must also have crossed a top cap from outside before the base.
     TopCapFirst,
+    /// No verdict: the triangle has zero world area, so no surface (rays do not cross it).
+    NoSurface,
     /// No verdict: the triangle's piece of surface has a seam (an edge whose two triangles
     /// disagree on uvs or normals there), so the surface itself has a crack a ray may pass.
     Seam,
@@ -118,7 +120,8 @@ enum Criterion {
 /// above the surface, and the difference between its height and the surface's changes sign (or
 /// touches zero) before the base. Other open pieces (the mountain) get
 /// [`Criterion::TopCapFirst`] (the shell is then a convex slab, the ray stays in it); pieces
-/// with a seam get [`Criterion::Seam`].
+/// with a seam get [`Criterion::Seam`]. Triangles of zero world area have no surface (as in
+/// the paper) and their edges bound their neighbours.
 fn criteria(scene: &Scene) -> Vec<Criterion> {
     use std::collections::HashMap;
     let key = |p: DVec3| (p.x.to_bits(), p.y.to_bits(), p.z.to_bits());
@@ -151,6 +154,19 @@ fn criteria(scene: &Scene) -> Vec<Criterion> {
         let whole = offset == offset.round() && (repeats || offset == DVec2::ZERO);
         a[0].1 == b[0].1 && a[1].1 == b[1].1 && whole && a[1].0 - b[1].0 == offset
     };
+    // A triangle of zero world area has no surface (Ogaki 2023, Fig. 9: "it disappears as
+    // expected as rays and the prism do not intersect"): it joins nothing, and the edges its
+    // neighbours share with it are their boundary edges.
+    let flat: Vec<bool> = scene
+        .triangles
+        .iter()
+        .map(|t| {
+            nlrt_oracle::crossing::has_zero_area(t.map(|v| scene.positions[v as usize].to_array()))
+        })
+        .collect();
+    for users in edges.values_mut() {
+        users.retain(|u| !flat[u.0]);
+    }
     // Pieces: triangles joined by edges they agree on, by union-find.
     let mut parent: Vec<usize> = (0..scene.triangles.len()).collect();
     fn root(parent: &mut [usize], mut i: usize) -> usize {
@@ -203,7 +219,13 @@ fn criteria(scene: &Scene) -> Vec<Criterion> {
         }
     }
     (0..scene.triangles.len())
-        .map(|i| piece[root(&mut parent, i)])
+        .map(|i| {
+            if flat[i] {
+                Criterion::NoSurface
+            } else {
+                piece[root(&mut parent, i)]
+            }
+        })
         .collect()
 }
 
@@ -338,7 +360,7 @@ fn measure_in<T: Real>(
             let decided = match criteria[base_triangle] {
                 Criterion::Base => true,
                 Criterion::TopCapFirst => top.is_some_and(|t| t <= t_base),
-                Criterion::Seam => false,
+                Criterion::Seam | Criterion::NoSurface => false,
             };
             if !decided {
                 return Verdict::NotDecided;
@@ -411,4 +433,40 @@ pub fn leak_image(report: &LeakReport) -> Vec<u8> {
             Verdict::Leak(_) => [255, 0, 0],
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scenes::{Size, builtin};
+
+    #[test]
+    fn criteria_follow_the_mesh_and_the_map() {
+        let all = |name: &str| criteria(&builtin(name, Size::Small).unwrap());
+        // Closed (the u = 0 / u = 1 wrap of a repeating map is not a seam).
+        assert!(all("torus").iter().all(|c| *c == Criterion::Base));
+        // Open, with heights on the boundary.
+        assert!(all("mountain").iter().all(|c| *c == Criterion::TopCapFirst));
+        let fig9 = all("fig9-displaced");
+        use Criterion::{Base, NoSurface, Seam, TopCapFirst};
+        assert_eq!(
+            fig9,
+            [
+                Base,
+                Base, // regular: boundary on the zero border
+                TopCapFirst,
+                TopCapFirst, // a triangle's uvs on the diagonal: interior heights
+                Seam,
+                Seam, // point-degenerate uvs on separate vertices
+                Base,
+                Base, // pinched to a line
+                Base,
+                Base, // pinched to a point
+                TopCapFirst,
+                NoSurface, // a line in world and uv: its neighbour's diagonal is open
+                TopCapFirst,
+                NoSurface, // a line in world only: the same
+            ]
+        );
+    }
 }
