@@ -132,6 +132,10 @@ enum Command {
         /// Output PNG.
         #[arg(short, long, default_value = "nlrt.png")]
         output: PathBuf,
+        /// Also write the primary hits' depth, normal and hit id (base triangle) to this
+        /// OpenEXR file (32-bit float channels Z, N.X, N.Y, N.Z; unsigned integer id).
+        #[arg(long)]
+        aov: Option<PathBuf>,
     },
     /// Speed, init time, memory and 1-thread vs all-threads scaling per scene and method (no
     /// images written).
@@ -351,6 +355,7 @@ fn main() -> ExitCode {
             method,
             args,
             output,
+            aov,
         } => {
             let built = match resolve_scene(&scene, args.scene_size.into()) {
                 Ok(s) => s,
@@ -386,6 +391,11 @@ fn main() -> ExitCode {
                 &run.frame.rgb8(),
             ) {
                 return fail("render", format!("cannot write {}: {e}", output.display()));
+            }
+            if let Some(path) = &aov
+                && let Err(e) = run.frame.write_aovs_exr(path)
+            {
+                return fail("render", e);
             }
             println!(
                 "{scene} ({method}): init {:.3} s, {:.3} Mrays/s ({} rays), written to {}",

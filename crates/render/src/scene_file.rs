@@ -6,8 +6,11 @@
 //! ```toml
 //! [mesh]
 //! obj = "base.obj"
+//! material = "diffuse"        # optional: "diffuse" (default) or "glossy"
 //! [displacement]
-//! height_map = "height.png"   # grayscale PNG, 8 or 16 bits, square, side a power of two
+//! height_map = "height.png"   # grayscale PNG, 8 or 16 bits, or an EXR of heights in [0, 1]
+//!                             # (channel Y, else R, else the only one); square, side a
+//!                             # power of two
 //! height_scale = 0.1
 //! tiling = 1.0                # optional, default 1
 //! [camera]
@@ -21,6 +24,7 @@
 //! `(u, v, h)` in `[0, 1]^3`), `height_scale` and `tiling` replaces `[displacement]`.
 
 use crate::scenes::{Camera, Content, Scene};
+use crate::trace::Material;
 use nlrt_accel::{HeightField, Wrap};
 use nlrt_poly::glam::{DVec2, DVec3};
 use serde::Deserialize;
@@ -39,6 +43,16 @@ struct File {
 #[serde(deny_unknown_fields)]
 struct MeshSection {
     obj: PathBuf,
+    #[serde(default)]
+    material: MaterialName,
+}
+
+#[derive(Deserialize, Default, Clone, Copy)]
+#[serde(rename_all = "lowercase")]
+enum MaterialName {
+    #[default]
+    Diffuse,
+    Glossy,
 }
 
 #[derive(Deserialize)]
@@ -190,6 +204,10 @@ pub fn load(path: &Path) -> Result<Scene, String> {
             fov_degrees: c.fov_degrees,
         },
         sun,
+        material: match file.mesh.material {
+            MaterialName::Diffuse => Material::Diffuse,
+            MaterialName::Glossy => Material::GLOSSY,
+        },
     })
 }
 
@@ -286,9 +304,15 @@ fn load_obj(path: &Path, base: bool) -> Result<ObjData, String> {
     Ok((p, n, uv, t))
 }
 
-/// A grayscale PNG (8 or 16 bits) as a height field.
+/// A grayscale PNG (8 or 16 bits), or an OpenEXR file (by its extension), as a height field.
 fn load_height_map(path: &Path) -> Result<HeightField, String> {
     let err = |m: String| format!("{}: {m}", path.display());
+    if path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("exr"))
+    {
+        return load_exr_height_map(path);
+    }
     let file = std::fs::File::open(path).map_err(|e| err(e.to_string()))?;
     let mut decoder = png::Decoder::new(std::io::BufReader::new(file));
     decoder.set_transformations(png::Transformations::IDENTITY);
@@ -331,6 +355,51 @@ fn load_height_map(path: &Path) -> Result<HeightField, String> {
     };
     if w != h {
         return Err(err(format!("height map is {w} x {h}; it must be square")));
+    }
+    HeightField::new(w, samples, Wrap::Repeat).map_err(|e| err(e.to_string()))
+}
+
+/// An OpenEXR height map: one channel (`Y`, else `R`, else the only one) of heights in
+/// `[0, 1]`, quantised to the 16-bit samples the height field stores (the nearest of 65,536
+/// levels: a relative step of 1.5e-5 of the height scale).
+fn load_exr_height_map(path: &Path) -> Result<HeightField, String> {
+    use exr::prelude::*;
+    let err = |m: String| format!("{}: {m}", path.display());
+    let image = read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .first_valid_layer()
+        .all_attributes()
+        .from_file(path)
+        .map_err(|e| err(format!("not a readable OpenEXR file: {e}")))?;
+    let layer = &image.layer_data;
+    let (w, h) = (layer.size.width(), layer.size.height());
+    let list = &layer.channel_data.list;
+    let named = |n: &str| list.iter().find(|c| c.name.eq(n));
+    let channel = named("Y")
+        .or_else(|| named("R"))
+        .or_else(|| (list.len() == 1).then(|| &list[0]))
+        .ok_or_else(|| {
+            let names: Vec<String> = list.iter().map(|c| c.name.to_string()).collect();
+            err(format!(
+                "no height channel: expected Y, R or a single channel, found {}",
+                names.join(", ")
+            ))
+        })?;
+    if w != h {
+        return Err(err(format!("height map is {w} x {h}; it must be square")));
+    }
+    let mut samples = Vec::with_capacity(w * h);
+    for (i, v) in channel.sample_data.values_as_f32().enumerate() {
+        if !(0.0..=1.0).contains(&v) {
+            return Err(err(format!(
+                "height {v} at pixel ({}, {}) is outside [0, 1] (scale heights with height_scale)",
+                i % w,
+                i / w
+            )));
+        }
+        samples.push((f64::from(v) * f64::from(u16::MAX)).round() as u16);
     }
     HeightField::new(w, samples, Wrap::Repeat).map_err(|e| err(e.to_string()))
 }
@@ -403,8 +472,12 @@ pub fn export(scene: &Scene, dir: &Path) -> Result<PathBuf, String> {
         }
     };
     let c = &scene.camera;
+    let material = match scene.material {
+        Material::Diffuse => "",
+        Material::Glossy { .. } => "material = \"glossy\"\n",
+    };
     let toml = format!(
-        "# The built-in scene '{name}', exported by `nlrt export {name}`.\n\n[mesh]\nobj = \"{name}.obj\"\n\n{content}\n[camera]\neye = [{}, {}, {}]\ntarget = [{}, {}, {}]\nfov_degrees = {}\nsun = [{}, {}, {}]\n",
+        "# The built-in scene '{name}', exported by `nlrt export {name}`.\n\n[mesh]\nobj = \"{name}.obj\"\n{material}\n{content}\n[camera]\neye = [{}, {}, {}]\ntarget = [{}, {}, {}]\nfov_degrees = {}\nsun = [{}, {}, {}]\n",
         c.eye.x,
         c.eye.y,
         c.eye.z,

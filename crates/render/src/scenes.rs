@@ -2,6 +2,7 @@
 //! (nothing is downloaded). Each is a base mesh with normals and uvs, a height map, a height
 //! scale, a tiling and a camera.
 
+use crate::trace::Material;
 use nlrt_accel::{BaseMesh, HeightField, Wrap};
 use nlrt_poly::glam::{DVec2, DVec3};
 use rayon::prelude::*;
@@ -30,6 +31,8 @@ pub struct Scene {
     pub camera: Camera,
     /// Direction towards the sun (unit).
     pub sun: DVec3,
+    /// The surface's material.
+    pub material: Material,
 }
 
 /// What fills a scene's shell.
@@ -252,6 +255,7 @@ pub fn mountain(side: usize) -> Scene {
             fov_degrees: 45.0,
         },
         sun: DVec3::new(0.5, 0.7, 0.3).normalize(),
+        material: Material::Diffuse,
     }
 }
 
@@ -316,6 +320,7 @@ pub fn cylinder(side: usize) -> Scene {
             fov_degrees: 45.0,
         },
         sun: DVec3::new(-0.4, 0.6, 0.7).normalize(),
+        material: Material::Diffuse,
     }
 }
 
@@ -341,6 +346,7 @@ pub fn fur(side: usize) -> Scene {
             fov_degrees: 45.0,
         },
         sun: DVec3::new(0.3, 0.8, 0.5).normalize(),
+        material: Material::Diffuse,
     }
 }
 
@@ -422,6 +428,7 @@ pub fn scales() -> Scene {
             fov_degrees: 45.0,
         },
         sun: DVec3::new(0.3, 0.8, 0.5).normalize(),
+        material: Material::GLOSSY,
     }
 }
 
@@ -492,6 +499,7 @@ pub fn cornell(n: usize) -> Scene {
             fov_degrees: 45.0,
         },
         sun: DVec3::new(0.4, 0.7, 0.6).normalize(),
+        material: Material::Diffuse,
     }
 }
 
@@ -516,6 +524,7 @@ pub fn torus_scene(side: usize) -> Scene {
             fov_degrees: 45.0,
         },
         sun: DVec3::new(0.3, 0.8, 0.5).normalize(),
+        material: Material::Diffuse,
     }
 }
 
@@ -606,6 +615,7 @@ pub fn fig9() -> Scene {
             fov_degrees: 45.0,
         },
         sun: DVec3::new(0.3, 0.8, 0.5).normalize(),
+        material: Material::Diffuse,
     }
 }
 

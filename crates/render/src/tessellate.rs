@@ -13,6 +13,8 @@ use rayon::prelude::*;
 /// World-space triangles of the tessellated displaced surface with their BVH.
 pub struct Tessellated {
     triangles: Vec<[DVec3; 3]>,
+    /// Base triangle of each triangle.
+    base: Vec<u32>,
     bvh: Bvh4<f64>,
     /// Base triangles skipped because their uvs are degenerate (no inverse of Eq. 2-3).
     pub skipped_uv_degenerate: usize,
@@ -72,7 +74,7 @@ impl Tessellated {
             bases.push((b, t, det));
         }
         let base_of = |b: usize| bases.iter().find(|x| x.0 == b).copied();
-        let triangles: Vec<[DVec3; 3]> = jobs
+        let (triangles, base): (Vec<[DVec3; 3]>, Vec<u32>) = jobs
             .par_iter()
             .flat_map_iter(|&(b, y, x0, x1)| {
                 let (_, t, det) = base_of(b).expect("job of a kept triangle");
@@ -126,13 +128,13 @@ impl Tessellated {
                         }
                         let w: Vec<DVec3> = poly.iter().map(world).collect();
                         for k in 1..w.len() - 1 {
-                            out.push([w[0], w[k], w[k + 1]]);
+                            out.push(([w[0], w[k], w[k + 1]], b as u32));
                         }
                     }
                 }
                 out
             })
-            .collect();
+            .unzip();
         let boxes: Vec<Aabb<f64>> = triangles
             .par_iter()
             .map(|t| Aabb::of_points(t.iter().copied()))
@@ -140,6 +142,7 @@ impl Tessellated {
         let bvh = Bvh4::build(&boxes, 4);
         Self {
             triangles,
+            base,
             bvh,
             skipped_uv_degenerate: skipped,
         }
@@ -151,13 +154,16 @@ impl Tessellated {
         self.triangles.len()
     }
 
-    /// Bytes of triangles and BVH.
+    /// Bytes of triangles, their base-triangle ids and BVH.
     #[must_use]
     pub fn memory_bytes(&self) -> usize {
-        self.triangles.len() * std::mem::size_of::<[DVec3; 3]>() + self.bvh.memory_bytes()
+        self.triangles.len() * std::mem::size_of::<[DVec3; 3]>()
+            + self.base.len() * std::mem::size_of::<u32>()
+            + self.bvh.memory_bytes()
     }
 
-    /// Nearest hit in `(t_min, t_max]`: distance and geometric normal facing the ray.
+    /// Nearest hit in `(t_min, t_max]`: distance, geometric normal facing the ray and base
+    /// triangle.
     #[must_use]
     pub fn intersect(
         &self,
@@ -165,7 +171,7 @@ impl Tessellated {
         dir: DVec3,
         t_min: f64,
         t_max: f64,
-    ) -> Option<(f64, DVec3)> {
+    ) -> Option<(f64, DVec3, u32)> {
         let slab = SlabRay::new(origin, dir);
         let mut best = None;
         self.bvh.traverse(&slab, t_min, t_max, |i, t_max| {
@@ -182,7 +188,11 @@ impl Tessellated {
         let tri = &self.triangles[i as usize];
         let t = moller_trumbore(tri, origin, dir)?;
         let n = (tri[1] - tri[0]).cross(tri[2] - tri[0]).normalize_or_zero();
-        Some((t, if n.dot(dir) > 0.0 { -n } else { n }))
+        Some((
+            t,
+            if n.dot(dir) > 0.0 { -n } else { n },
+            self.base[i as usize],
+        ))
     }
 }
 

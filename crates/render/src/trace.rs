@@ -104,10 +104,21 @@ impl fmt::Display for Method {
     }
 }
 
+/// A hit as the renderer sees it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TraceHit {
+    /// Distance along the ray.
+    pub t: f64,
+    /// Unit normal facing against the ray.
+    pub normal: DVec3,
+    /// Base triangle hit (the hit-id AOV).
+    pub id: u32,
+}
+
 /// Intersection of a ray with the scene.
 pub trait Tracer: Sync {
-    /// Nearest hit with distance in `(t_min, t_max]`: distance and unit normal facing the ray.
-    fn intersect(&self, origin: DVec3, dir: DVec3, t_min: f64, t_max: f64) -> Option<(f64, DVec3)>;
+    /// Nearest hit with distance in `(t_min, t_max]`.
+    fn intersect(&self, origin: DVec3, dir: DVec3, t_min: f64, t_max: f64) -> Option<TraceHit>;
     /// Bytes of acceleration data.
     fn memory_bytes(&self) -> usize;
 }
@@ -153,7 +164,7 @@ impl<T: Real> Nonlinear<T> {
 }
 
 impl<T: Real> Tracer for Nonlinear<T> {
-    fn intersect(&self, origin: DVec3, dir: DVec3, t_min: f64, t_max: f64) -> Option<(f64, DVec3)> {
+    fn intersect(&self, origin: DVec3, dir: DVec3, t_min: f64, t_max: f64) -> Option<TraceHit> {
         let v = |a: DVec3| T::Vec3::new(T::from_f64(a.x), T::from_f64(a.y), T::from_f64(a.z));
         let ray = Ray::new(v(origin), v(dir))?;
         let mut stats = TraversalStats::default();
@@ -163,18 +174,21 @@ impl<T: Real> Tracer for Nonlinear<T> {
             T::INFINITY
         };
         let t_min = T::from_f64(t_min);
-        let (t, n) = match self {
+        let (t, n, id) = match self {
             Self::Displaced(s) => {
                 let hit = s.intersect(&ray, t_min, t_max, &mut stats)?;
-                (hit.hit.t, s.normal(&hit, ray.dir)?)
+                (hit.hit.t, s.normal(&hit, ray.dir)?, hit.triangle)
             }
             Self::Shell(s) => {
                 let hit = s.intersect(&ray, t_min, t_max, &mut stats)?;
-                (hit.hit.t, s.normal(&hit, ray.dir)?)
+                (hit.hit.t, s.normal(&hit, ray.dir)?, hit.triangle)
             }
         };
-        let n = DVec3::new(n.x().to_f64(), n.y().to_f64(), n.z().to_f64());
-        Some((t.to_f64(), n))
+        Some(TraceHit {
+            t: t.to_f64(),
+            normal: DVec3::new(n.x().to_f64(), n.y().to_f64(), n.z().to_f64()),
+            id,
+        })
     }
 
     fn memory_bytes(&self) -> usize {
@@ -201,7 +215,7 @@ impl<T: Real> TessellationFree<T> {
 }
 
 impl<T: Real> Tracer for TessellationFree<T> {
-    fn intersect(&self, origin: DVec3, dir: DVec3, t_min: f64, t_max: f64) -> Option<(f64, DVec3)> {
+    fn intersect(&self, origin: DVec3, dir: DVec3, t_min: f64, t_max: f64) -> Option<TraceHit> {
         let v = |a: DVec3| T::Vec3::new(T::from_f64(a.x), T::from_f64(a.y), T::from_f64(a.z));
         let ray = Ray::new(v(origin), v(dir))?;
         let t_max = if t_max.is_finite() {
@@ -214,8 +228,11 @@ impl<T: Real> Tracer for TessellationFree<T> {
             .0
             .intersect_affine(&ray, T::from_f64(t_min), t_max, &mut stats)?;
         let n = DisplacedSurface::affine_normal(&hit, ray.dir)?;
-        let n = DVec3::new(n.x().to_f64(), n.y().to_f64(), n.z().to_f64());
-        Some((hit.t.to_f64(), n))
+        Some(TraceHit {
+            t: hit.t.to_f64(),
+            normal: DVec3::new(n.x().to_f64(), n.y().to_f64(), n.z().to_f64()),
+            id: hit.triangle,
+        })
     }
 
     fn memory_bytes(&self) -> usize {
@@ -224,8 +241,9 @@ impl<T: Real> Tracer for TessellationFree<T> {
 }
 
 impl Tracer for Tessellated {
-    fn intersect(&self, origin: DVec3, dir: DVec3, t_min: f64, t_max: f64) -> Option<(f64, DVec3)> {
-        Tessellated::intersect(self, origin, dir, t_min, t_max)
+    fn intersect(&self, origin: DVec3, dir: DVec3, t_min: f64, t_max: f64) -> Option<TraceHit> {
+        let (t, normal, id) = Tessellated::intersect(self, origin, dir, t_min, t_max)?;
+        Some(TraceHit { t, normal, id })
     }
 
     fn memory_bytes(&self) -> usize {
@@ -268,6 +286,10 @@ pub struct Frame {
     pub color: Vec<[f32; 3]>,
     /// Distance of the centre sample's primary hit (NaN: no hit).
     pub depth: Vec<f64>,
+    /// Unit normal of the centre sample's primary hit, facing the camera (zero: no hit).
+    pub normal: Vec<[f32; 3]>,
+    /// Base triangle of the centre sample's primary hit ([`u32::MAX`]: no hit).
+    pub hit_id: Vec<u32>,
     /// Primary rays cast.
     pub primary_rays: u64,
     /// All rays cast (primary, shadow, bounce).
@@ -283,7 +305,8 @@ pub struct Frame {
 /// mesh is 5e-4).
 const SECONDARY_OFFSET: f64 = 1e-4;
 
-struct Rng(u64);
+/// The renderer's random numbers (SplitMix64, one stream per pixel).
+pub struct Rng(u64);
 impl Rng {
     fn next(&mut self) -> f64 {
         self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
@@ -299,16 +322,75 @@ fn sky(dir: DVec3) -> DVec3 {
     DVec3::new(0.55, 0.6, 0.7) * (1.0 - t) + DVec3::new(0.35, 0.5, 0.9) * t
 }
 
+/// A surface's reflectance.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Material {
+    /// Lambertian, albedo 0.5.
+    Diffuse,
+    /// A normalised Phong lobe (specular reflectance 0.5, the given exponent) around the
+    /// mirror direction: the glossy material, whose bounce rays stay coherent around the
+    /// reflection instead of spreading over the hemisphere.
+    Glossy {
+        /// Phong exponent (sharper for larger).
+        exponent: f64,
+    },
+}
+
+/// Reflectance of both materials.
+const ALBEDO: f64 = 0.5;
+
+impl Material {
+    /// The glossy material of the built-in scenes and of scene files (`material = "glossy"`).
+    pub const GLOSSY: Material = Material::Glossy { exponent: 40.0 };
+
+    /// `pi` times the BRDF for light arriving from `light` seen along `dir` (towards the
+    /// surface) at normal `n`.
+    #[must_use]
+    pub fn brdf_times_pi(self, n: DVec3, dir: DVec3, light: DVec3) -> f64 {
+        match self {
+            Material::Diffuse => ALBEDO,
+            Material::Glossy { exponent } => {
+                let mirror = dir - n * (2.0 * dir.dot(n));
+                let c = mirror.dot(light).max(0.0);
+                ALBEDO * (exponent + 2.0) * 0.5 * c.powf(exponent)
+            }
+        }
+    }
+
+    /// A bounce direction and the path weight (BRDF times cosine over the pdf); `None` when
+    /// the sampled direction goes below the surface (the path ends).
+    pub fn sample(self, n: DVec3, dir: DVec3, rng: &mut Rng) -> Option<(DVec3, f64)> {
+        match self {
+            Material::Diffuse => Some((cosine_direction(n, rng), ALBEDO)),
+            Material::Glossy { exponent } => {
+                let mirror = (dir - n * (2.0 * dir.dot(n))).normalize();
+                // Phong lobe sampling: pdf (e + 1) / (2 pi) cos^e around the mirror direction.
+                let (r1, r2) = (rng.next(), rng.next());
+                let cos_a = r2.powf(1.0 / (exponent + 1.0));
+                let sin_a = (1.0 - cos_a * cos_a).max(0.0).sqrt();
+                let phi = std::f64::consts::TAU * r1;
+                let next = frame_around(mirror, phi.cos() * sin_a, phi.sin() * sin_a, cos_a);
+                let cos = next.dot(n);
+                (cos > 0.0).then(|| (next, ALBEDO * (exponent + 2.0) / (exponent + 1.0) * cos))
+            }
+        }
+    }
+}
+
+/// `x t + y b + z n` for an orthonormal frame `(t, b, n)` around the unit vector `n`.
+fn frame_around(n: DVec3, x: f64, y: f64, z: f64) -> DVec3 {
+    let helper = if n.x.abs() > 0.9 { DVec3::Y } else { DVec3::X };
+    let t = n.cross(helper).normalize();
+    let b = n.cross(t);
+    (t * x + b * y + n * z).normalize()
+}
+
 /// Cosine-weighted direction around `n`.
 fn cosine_direction(n: DVec3, rng: &mut Rng) -> DVec3 {
     let (r1, r2) = (rng.next(), rng.next());
     let phi = std::f64::consts::TAU * r1;
     let r = r2.sqrt();
-    let (x, y, z) = (r * phi.cos(), r * phi.sin(), (1.0 - r2).sqrt());
-    let helper = if n.x.abs() > 0.9 { DVec3::Y } else { DVec3::X };
-    let t = n.cross(helper).normalize();
-    let b = n.cross(t);
-    (t * x + b * y + n * z).normalize()
+    frame_around(n, r * phi.cos(), r * phi.sin(), (1.0 - r2).sqrt())
 }
 
 /// Renders `scene` with `tracer`; `progress` is called with the number of rows finished.
@@ -332,22 +414,24 @@ pub fn render(
         (hi - lo).length().max(1e-9)
     };
     let offset = SECONDARY_OFFSET * extent;
-    let albedo = 0.5;
     let sun_radiance = DVec3::new(1.15, 1.05, 0.95);
     let primary = AtomicU64::new(0);
     let all = AtomicU64::new(0);
     let rows_done = AtomicU64::new(0);
     let start = std::time::Instant::now();
-    let rows: Vec<(Vec<[f32; 3]>, Vec<f64>)> = (0..h)
+    type Row = (Vec<[f32; 3]>, Vec<f64>, Vec<([f32; 3], u32)>);
+    let rows: Vec<Row> = (0..h)
         .into_par_iter()
         .map(|y| {
             let mut colors = Vec::with_capacity(w);
             let mut depths = Vec::with_capacity(w);
+            let mut aovs = Vec::with_capacity(w);
             let (mut n_primary, mut n_all) = (0u64, 0u64);
             for x in 0..w {
                 let mut rng = Rng(((y * w + x) as u64) << 20);
                 let mut sum = DVec3::ZERO;
                 let mut depth = f64::NAN;
+                let mut aov = ([0.0f32; 3], u32::MAX);
                 for s in 0..opts.spp.max(1) {
                     let (jx, jy) = if s == 0 {
                         (0.5, 0.5)
@@ -365,51 +449,68 @@ pub fn render(
                     n_primary += 1;
                     for bounce in 0..=opts.bounces {
                         n_all += 1;
-                        let Some((t, n)) = tracer.intersect(origin, dir, 0.0, f64::INFINITY) else {
+                        let Some(hit) = tracer.intersect(origin, dir, 0.0, f64::INFINITY) else {
                             sum += throughput * sky(dir);
                             break;
                         };
+                        let n = hit.normal;
                         if s == 0 && bounce == 0 {
-                            depth = t;
+                            depth = hit.t;
+                            aov = ([n.x as f32, n.y as f32, n.z as f32], hit.id);
                         }
-                        let p = origin + dir * t + n * offset;
-                        throughput *= albedo;
+                        let p = origin + dir * hit.t + n * offset;
+                        // Next-event estimation towards the sun: BRDF times the sun's
+                        // irradiance (pi * sun_radiance, so that a white diffuse surface facing
+                        // it reflects sun_radiance) times the cosine.
                         let cos = n.dot(scene.sun);
                         if cos > 0.0 {
                             n_all += 1;
                             if tracer.intersect(p, scene.sun, 0.0, f64::INFINITY).is_none() {
-                                sum += throughput * sun_radiance * cos;
+                                let brdf_pi = scene.material.brdf_times_pi(n, dir, scene.sun);
+                                sum += throughput * sun_radiance * (brdf_pi * cos);
                             }
                         }
                         if bounce == opts.bounces {
                             break;
                         }
+                        let Some((next, weight)) = scene.material.sample(n, dir, &mut rng) else {
+                            break;
+                        };
+                        throughput *= weight;
                         origin = p;
-                        dir = cosine_direction(n, &mut rng);
+                        dir = next;
                     }
                 }
                 let c = sum / opts.spp.max(1) as f64;
                 colors.push([c.x as f32, c.y as f32, c.z as f32]);
                 depths.push(depth);
+                aovs.push(aov);
             }
             primary.fetch_add(n_primary, Ordering::Relaxed);
             all.fetch_add(n_all, Ordering::Relaxed);
             progress(rows_done.fetch_add(1, Ordering::Relaxed) as usize + 1);
-            (colors, depths)
+            (colors, depths, aovs)
         })
         .collect();
     let seconds = start.elapsed().as_secs_f64();
     let mut color = Vec::with_capacity(w * h);
     let mut depth = Vec::with_capacity(w * h);
-    for (c, d) in rows {
+    let (mut normal, mut hit_id) = (Vec::with_capacity(w * h), Vec::with_capacity(w * h));
+    for (c, d, a) in rows {
         color.extend(c);
         depth.extend(d);
+        for (n, id) in a {
+            normal.push(n);
+            hit_id.push(id);
+        }
     }
     Frame {
         width: w,
         height: h,
         color,
         depth,
+        normal,
+        hit_id,
         primary_rays: primary.into_inner(),
         all_rays: all.into_inner(),
         seconds,
@@ -454,5 +555,77 @@ impl Frame {
     #[must_use]
     pub fn rgb8(&self) -> Vec<u8> {
         self.color.iter().flat_map(|c| c.map(to_srgb8)).collect()
+    }
+}
+
+impl Frame {
+    /// Writes the centre samples' AOVs as a 32-bit float OpenEXR file: `Z` (hit distance, NaN
+    /// where the ray missed), `N.X`, `N.Y`, `N.Z` (unit normal facing the camera, zero on a
+    /// miss) and `id` (base triangle, as an unsigned integer channel; 2^32 - 1 on a miss).
+    ///
+    /// # Errors
+    /// When the file cannot be written.
+    pub fn write_aovs_exr(&self, path: &std::path::Path) -> Result<(), String> {
+        use exr::prelude::*;
+        let w = self.width;
+        let channels = SpecificChannels::build()
+            .with_channel("Z")
+            .with_channel("N.X")
+            .with_channel("N.Y")
+            .with_channel("N.Z")
+            .with_channel("id")
+            .with_pixel_fn(|p: Vec2<usize>| {
+                let i = p.y() * w + p.x();
+                let n = self.normal[i];
+                (self.depth[i] as f32, n[0], n[1], n[2], self.hit_id[i])
+            });
+        Image::from_channels((self.width, self.height), channels)
+            .write()
+            .to_file(path)
+            .map_err(|e| format!("cannot write {}: {e}", path.display()))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The BRDF used for next-event estimation and the sampling used for bounces must describe
+    /// the same material, or images are biased: their directional albedos (the integral of
+    /// BRDF times cosine over the hemisphere) agree, estimated independently: by uniform
+    /// hemisphere sampling of `brdf_times_pi`, and by the mean bounce weight of `sample`.
+    #[test]
+    fn sampling_and_brdf_agree_on_the_albedo() {
+        let n = DVec3::new(0.2, 0.9, -0.1).normalize();
+        for material in [Material::Diffuse, Material::GLOSSY] {
+            for incidence in [0.0f64, 0.5, 1.2] {
+                // A direction towards the surface at `incidence` from the normal.
+                let t = n.cross(DVec3::X).normalize();
+                let dir = -(n * incidence.cos() + t * incidence.sin());
+                let mut rng = Rng(7);
+                let count = 400_000;
+                let mut by_sampling = 0.0;
+                let mut by_brdf = 0.0;
+                for _ in 0..count {
+                    if let Some((_, w)) = material.sample(n, dir, &mut rng) {
+                        by_sampling += w;
+                    }
+                    // Uniform hemisphere: pdf 1 / (2 pi); BRDF = brdf_times_pi / pi.
+                    let (r1, r2) = (rng.next(), rng.next());
+                    let z = r1;
+                    let s = (1.0 - z * z).sqrt();
+                    let phi = std::f64::consts::TAU * r2;
+                    let l = frame_around(n, s * phi.cos(), s * phi.sin(), z);
+                    by_brdf += material.brdf_times_pi(n, dir, l) * z * 2.0;
+                }
+                let (a, b) = (by_sampling / count as f64, by_brdf / count as f64);
+                // Monte Carlo: a few standard errors of the noisier (uniform) estimate.
+                assert!(
+                    (a - b).abs() < 0.02,
+                    "{material:?} at {incidence}: {a} vs {b}"
+                );
+                assert!(a <= ALBEDO + 0.01, "{material:?}: energy {a}");
+            }
+        }
     }
 }

@@ -191,3 +191,187 @@ fn exported_builtin_scenes_render_like_the_originals() {
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// The example's 16-bit PNG heights as a one-channel 32-bit float EXR (channel `name`).
+fn write_exr_heights(path: &Path, png_path: &Path, name: &str, edit: impl Fn(&mut Vec<f32>)) {
+    let mut decoder = png::Decoder::new(std::io::BufReader::new(
+        std::fs::File::open(png_path).unwrap(),
+    ));
+    decoder.set_transformations(png::Transformations::IDENTITY);
+    let mut reader = decoder.read_info().unwrap();
+    let mut buf = vec![0; reader.output_buffer_size().unwrap()];
+    let info = reader.next_frame(&mut buf).unwrap();
+    let side = info.width as usize;
+    let mut heights: Vec<f32> = match info.bit_depth {
+        png::BitDepth::Sixteen => buf[..side * side * 2]
+            .chunks_exact(2)
+            .map(|c| f32::from(u16::from_be_bytes([c[0], c[1]])) / 65535.0)
+            .collect(),
+        _ => buf[..side * side]
+            .iter()
+            .map(|&c| f32::from(c) / 255.0)
+            .collect(),
+    };
+    edit(&mut heights);
+    use exr::prelude::*;
+    let channels = SpecificChannels::build()
+        .with_channel(name)
+        .with_pixel_fn(|p: Vec2<usize>| (heights[p.y() * side + p.x()],));
+    Image::from_channels((side, side), channels)
+        .write()
+        .to_file(path)
+        .unwrap();
+}
+
+#[test]
+fn exr_height_maps_render_like_the_png_they_were_made_from() {
+    let dir = scratch("exr");
+    write_exr_heights(&dir.join("bumps.exr"), &dir.join("bumps.png"), "Y", |_| {});
+    let render_to = |name: &str| {
+        let out = dir.join(name);
+        let o = nlrt(&[
+            "render",
+            dir.join("bumps.toml").to_str().unwrap(),
+            "--size",
+            "48x36",
+            "--precision",
+            "f64",
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        std::fs::read(out).unwrap()
+    };
+    let from_png = render_to("png.png");
+    edit(&dir, "bumps.toml", "\"bumps.png\"", "\"bumps.exr\"");
+    // Heights s / 65535 in f32 round back to s exactly: the same samples, the same image.
+    assert_eq!(render_to("exr.png"), from_png);
+}
+
+#[test]
+fn bad_exr_height_maps_are_rejected() {
+    type Case<'a> = (&'a str, &'a str, fn(&mut Vec<f32>), &'a [&'a str]);
+    let cases: [Case; 4] = [
+        (
+            "range",
+            "Y",
+            |h| h[5] = 1.5,
+            &["bumps.exr", "outside [0, 1]"],
+        ),
+        (
+            "nan",
+            "Y",
+            |h| h[7] = f32::NAN,
+            &["bumps.exr", "outside [0, 1]"],
+        ),
+        ("channel", "R", |_| {}, &[]), // R is accepted
+        ("broken", "Y", |_| {}, &["bumps.exr", "OpenEXR"]),
+    ];
+    for (name, channel, change, needles) in cases {
+        let dir = scratch(&format!("exr-{name}"));
+        write_exr_heights(
+            &dir.join("bumps.exr"),
+            &dir.join("bumps.png"),
+            channel,
+            change,
+        );
+        if name == "broken" {
+            std::fs::write(dir.join("bumps.exr"), b"v/1\x01 not an exr").unwrap();
+        }
+        edit(&dir, "bumps.toml", "\"bumps.png\"", "\"bumps.exr\"");
+        if needles.is_empty() {
+            let out = nlrt(&[
+                "render",
+                dir.join("bumps.toml").to_str().unwrap(),
+                "--size",
+                "8x6",
+                "-o",
+                dir.join("out.png").to_str().unwrap(),
+            ]);
+            assert!(
+                out.status.success(),
+                "{}",
+                String::from_utf8_lossy(&out.stderr)
+            );
+        } else {
+            expect_error(&dir, needles);
+        }
+    }
+    // Two channels, neither Y nor R.
+    let dir = scratch("exr-two");
+    use exr::prelude::*;
+    let channels = SpecificChannels::build()
+        .with_channel("A")
+        .with_channel("B")
+        .with_pixel_fn(|_: Vec2<usize>| (0.5f32, 0.5f32));
+    Image::from_channels((8, 8), channels)
+        .write()
+        .to_file(dir.join("bumps.exr"))
+        .unwrap();
+    edit(&dir, "bumps.toml", "\"bumps.png\"", "\"bumps.exr\"");
+    expect_error(&dir, &["bumps.exr", "no height channel", "A, B"]);
+}
+
+#[test]
+fn aovs_are_written_as_exr() {
+    let dir = scratch("aov");
+    let aov = dir.join("aov.exr");
+    let (w, h) = (40usize, 30usize);
+    let out = nlrt(&[
+        "render",
+        "mountain",
+        "--size",
+        &format!("{w}x{h}"),
+        "-o",
+        dir.join("out.png").to_str().unwrap(),
+        "--aov",
+        aov.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    use exr::prelude::*;
+    let image = read_all_flat_layers_from_file(&aov).unwrap();
+    let layer = &image.layer_data[0];
+    assert_eq!((layer.size.width(), layer.size.height()), (w, h));
+    let channel = |n: &str| -> Vec<f32> {
+        layer
+            .channel_data
+            .list
+            .iter()
+            .find(|c| c.name.eq(n))
+            .unwrap_or_else(|| panic!("channel {n}"))
+            .sample_data
+            .values_as_f32()
+            .collect()
+    };
+    let (z, nx, ny, nz, id) = (
+        channel("Z"),
+        channel("N.X"),
+        channel("N.Y"),
+        channel("N.Z"),
+        channel("id"),
+    );
+    let mut hits = 0;
+    for i in 0..w * h {
+        let length = (nx[i] * nx[i] + ny[i] * ny[i] + nz[i] * nz[i]).sqrt();
+        if z[i].is_nan() {
+            assert_eq!((length, id[i]), (0.0, u32::MAX as f32));
+        } else {
+            hits += 1;
+            assert!(
+                z[i] > 0.0 && (length - 1.0).abs() < 1e-5,
+                "{i}: {} {length}",
+                z[i]
+            );
+            assert!(
+                id[i] == 0.0 || id[i] == 1.0,
+                "the mountain has two base triangles"
+            );
+        }
+    }
+    // The mountain fills about a third of this view, the sky the rest.
+    assert!(hits > w * h / 5 && hits < w * h, "{hits}");
+}
