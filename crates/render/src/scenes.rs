@@ -88,8 +88,8 @@ impl Camera {
 /// Names of the built-in scenes: displacement mapping (mountain, cylinder, fur) and shell
 /// mapping (scales, cornell, fig9). `torus` is the watertightness scene of the paper's Fig. 8,
 /// `fig9` its Fig. 9 (degenerate base meshes and prisms).
-pub const SCENE_NAMES: [&str; 7] = [
-    "mountain", "cylinder", "fur", "torus", "scales", "cornell", "fig9",
+pub const SCENE_NAMES: [&str; 9] = [
+    "mountain", "cylinder", "fur", "torus", "feathers", "scales", "cornell", "highpoly", "fig9",
 ];
 
 /// Scenes `nlrt watertight` measures by default (displacement scenes whose rays can be
@@ -133,6 +133,8 @@ pub fn builtin(name: &str, size: Size) -> Option<Scene> {
         "fig9" => Some(fig9()),
         "fig9-displaced" => Some(fig9_displaced(if big { 1024 } else { 256 })),
         "cornell" => Some(cornell(if big { 15 } else { 6 })),
+        "feathers" => Some(feathers()),
+        "highpoly" => Some(highpoly(if big { 270 } else { 32 })),
         _ => None,
     }
 }
@@ -657,4 +659,106 @@ pub fn fig9_displaced(side: usize) -> Scene {
         fov_degrees: 60.0,
     };
     scene
+}
+
+/// A feather in the unit tile: a shaft rising along v, and `barbs` pairs of barbs, each a
+/// thin strip of two quads sweeping out and up from the shaft and drooping at its tip
+/// (`8 barbs + 2` triangles).
+#[must_use]
+pub fn feather_object(barbs: usize) -> Vec<[DVec3; 3]> {
+    let shaft_h = |v: f64| 0.15 + 0.6 * v;
+    let mut out = Vec::new();
+    let p = |u: f64, v: f64, h: f64| DVec3::new(u, v, h.clamp(0.0, 1.0));
+    // Shaft: a narrow strip.
+    let (a, b) = (p(0.49, 0.03, shaft_h(0.03)), p(0.51, 0.03, shaft_h(0.03)));
+    let (c, d) = (p(0.51, 0.97, shaft_h(0.97)), p(0.49, 0.97, shaft_h(0.97)));
+    out.push([a, b, c]);
+    out.push([a, c, d]);
+    let width = 0.75 / barbs as f64;
+    for k in 0..barbs {
+        let v0 = 0.08 + 0.78 * k as f64 / barbs as f64;
+        let length = 0.46 * (1.0 - 0.5 * (k as f64 / barbs as f64 - 0.3).abs());
+        for side in [-1.0, 1.0] {
+            // Centre line of the barb at parameter s in [0, 1]: out, forward and up, drooping.
+            let at = |s: f64, dv: f64| {
+                let u = 0.5 + side * length * s;
+                let v = v0 + 0.1 * s + dv;
+                p(u, v.min(0.99), shaft_h(v0) + 0.15 * s - 0.25 * s * s)
+            };
+            for (s0, s1) in [(0.0, 0.5), (0.5, 1.0)] {
+                let taper = |s: f64| width * (1.0 - 0.6 * s);
+                out.push([at(s0, 0.0), at(s1, 0.0), at(s1, taper(s1))]);
+                out.push([at(s0, 0.0), at(s1, taper(s1)), at(s0, taper(s0))]);
+            }
+        }
+    }
+    out
+}
+
+/// (d) Feathers: a torus of 2,048 base triangles with a feather object (98 triangles) tiled
+/// 64 x 128 (tiling 64, the torus's v running over two units of uv).
+#[must_use]
+pub fn feathers() -> Scene {
+    let (positions, normals, mut uvs, triangles) = torus(32, 1.0, 0.4);
+    for uv in &mut uvs {
+        uv.y *= 2.0;
+    }
+    Scene {
+        name: "feathers",
+        positions,
+        normals,
+        uvs,
+        triangles,
+        content: Content::Shell(feather_object(12)),
+        height_scale: 0.08,
+        tiling: 64.0,
+        camera: Camera {
+            eye: DVec3::new(0.0, 1.8, 2.2),
+            target: DVec3::new(0.0, -0.1, 0.0),
+            fov_degrees: 45.0,
+        },
+        sun: DVec3::new(0.3, 0.8, 0.5).normalize(),
+        material: Material::Diffuse,
+    }
+}
+
+/// A closed, bumpy blob in the unit tile: a sphere of `n x n` quads (`2 n^2` triangles:
+/// 145,800 for `n = 270`) whose radius ripples with the angles, the high-polygon instanced
+/// object of Table 2 (h).
+#[must_use]
+pub fn blob_object(n: usize) -> Vec<[DVec3; 3]> {
+    let point = |s: f64, t: f64| {
+        let (theta, phi) = (TAU * s, std::f64::consts::PI * t);
+        let r = 0.36 + 0.06 * (7.0 * theta).sin() * (5.0 * phi).sin();
+        let dir = DVec3::new(theta.cos() * phi.sin(), theta.sin() * phi.sin(), phi.cos());
+        DVec3::new(0.5, 0.5, 0.5) + dir * r
+    };
+    patch(n, point)
+        .into_iter()
+        .filter(|t| (t[1] - t[0]).cross(t[2] - t[0]).length_squared() > 0.0)
+        .collect()
+}
+
+/// (h) High-polygon object: a torus of 512 base triangles with a bumpy blob tiled 16 x 16
+/// (`2 n^2` triangles per instance, minus the zero-area ones at the poles).
+#[must_use]
+pub fn highpoly(n: usize) -> Scene {
+    let (positions, normals, uvs, triangles) = torus(16, 1.0, 0.4);
+    Scene {
+        name: "highpoly",
+        positions,
+        normals,
+        uvs,
+        triangles,
+        content: Content::Shell(blob_object(n)),
+        height_scale: 0.12,
+        tiling: 16.0,
+        camera: Camera {
+            eye: DVec3::new(0.0, 1.8, 2.2),
+            target: DVec3::new(0.0, -0.1, 0.0),
+            fov_degrees: 45.0,
+        },
+        sun: DVec3::new(0.3, 0.8, 0.5).normalize(),
+        material: Material::Diffuse,
+    }
 }

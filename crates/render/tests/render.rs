@@ -57,7 +57,13 @@ fn shell_mapping_equals_tessellation_where_planes_map_to_planes() {
 /// on nearly every pixel.
 #[test]
 fn curved_scenes_agree_with_the_reference_on_most_pixels() {
-    for scene in [scenes::cylinder(64), scenes::fur(32), scenes::scales()] {
+    for scene in [
+        scenes::cylinder(64),
+        scenes::fur(32),
+        scenes::scales(),
+        scenes::feathers(),
+        scenes::highpoly(16),
+    ] {
         let reference = render(&scene, &Tessellated::new(&scene), &small(), &|_| {});
         let nl = render(&scene, &Nonlinear::<f64>::new(&scene), &small(), &|_| {});
         let e = compare(&nl, &reference);

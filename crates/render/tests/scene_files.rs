@@ -174,7 +174,7 @@ fn exported_builtin_scenes_render_like_the_originals() {
         spp: 1,
         bounces: 0,
     };
-    for name in ["fur", "scales", "cornell"] {
+    for name in ["fur", "scales", "cornell", "feathers", "highpoly"] {
         let original = scenes::builtin(name, Size::Small).unwrap();
         let loaded = load(&export(&original, &dir).unwrap()).unwrap();
         let a = render(&original, &Nonlinear::<f64>::new(&original), &opts, &|_| {});
