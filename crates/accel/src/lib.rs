@@ -41,6 +41,7 @@ mod affine;
 mod bvh;
 mod cells;
 mod displacement;
+mod geometry_image;
 mod heightfield;
 mod mesh;
 mod shell;
@@ -51,6 +52,7 @@ pub use displacement::{
     DisplacedSurface, DisplacementError, MAX_TEXEL_COORDINATE, RootNodes, SurfaceHit, TexelPart,
     TraversalStats,
 };
+pub use geometry_image::{GeometryImage, GeometryImageError, GeometryImageHit};
 pub use heightfield::{HEIGHT_ONE, HeightField, HeightMapError, Wrap};
 pub use mesh::{BaseMesh, MeshError, prism_bounds};
 pub use shell::{ShellError, ShellHit, ShellObject, ShellSurface};

@@ -4,6 +4,8 @@
 //! - nonlinear tracing and tessellation-free mapping share the min-max pyramid: a partial
 //!   update of the nodes over the stroke ([`nlrt_accel::HeightField::update_region`]), against
 //!   a full rebuild of the pyramid; the TLAS does not depend on the heights;
+//! - the geometry image (Carr et al. 2006) is re-sampled and its pyramid rebuilt (timed over
+//!   the whole map: the paper rebuilds it every frame);
 //! - the pre-tessellated reference must re-tessellate and rebuild its BVH (timed as a full
 //!   build at the same map size: the simplest correct answer; a refit of the stroke's
 //!   triangles would be cheaper, and is not what users of a static BVH get).
@@ -61,6 +63,8 @@ pub struct EditReport {
     pub rebuild_seconds: f64,
     /// Seconds of a full re-tessellation and BVH build (when measured).
     pub tessellated_seconds: Option<f64>,
+    /// Seconds of re-sampling the geometry image and rebuilding its pyramid (f32).
+    pub geometry_image_seconds: f64,
     /// Rays compared between the updated surface and one built from scratch.
     pub verified_rays: usize,
     /// Rays whose hit distance differs between them (0 when the update is right).
@@ -143,9 +147,13 @@ pub fn run(opts: &EditOptions) -> Result<EditReport, String> {
         field.rebuild();
         rebuilds.push(start.elapsed().as_secs_f64());
     }
+    let mut edited = scene.clone();
+    edited.content = Content::Displacement(surface.field().clone());
+    let start = Instant::now();
+    let image = crate::resample::geometry_image::<f32>(&edited);
+    let geometry_image_seconds = start.elapsed().as_secs_f64();
+    drop(image);
     let tessellated_seconds = opts.reference.then(|| {
-        let mut edited = scene.clone();
-        edited.content = Content::Displacement(surface.field().clone());
         let start = Instant::now();
         let t = Tessellated::new(&edited);
         let seconds = start.elapsed().as_secs_f64();
@@ -160,6 +168,7 @@ pub fn run(opts: &EditOptions) -> Result<EditReport, String> {
         partial_max_seconds,
         rebuild_seconds: median(rebuilds),
         tessellated_seconds,
+        geometry_image_seconds,
         verified_rays,
         verify_mismatches,
     })
@@ -215,6 +224,10 @@ pub fn markdown(r: &EditReport) -> String {
         brush = r.brush,
         strokes = r.strokes,
     );
+    md.push_str(&format!(
+        "| geometry image f32 | re-sampling and pyramid rebuild (whole map) | {} |\n",
+        ms(r.geometry_image_seconds)
+    ));
     match r.tessellated_seconds {
         Some(s) => md.push_str(&format!(
             "| pre-tessellated f64 | re-tessellation and BVH build | {} |\n",

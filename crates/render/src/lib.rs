@@ -11,6 +11,7 @@
 pub mod edit;
 pub mod plot;
 pub mod report;
+pub mod resample;
 pub mod scene_file;
 pub mod scenes;
 pub mod solvers;

@@ -35,6 +35,8 @@ enum MethodKind {
     Nonlinear,
     /// Tessellation-free displacement mapping (Thonat et al. 2021); height fields only.
     TessellationFree,
+    /// Geometry-image ray tracing (Carr et al. 2006); height fields on one uv chart only.
+    GeometryImage,
     /// The pre-tessellated reference (f64).
     Tessellated,
 }
@@ -237,10 +239,11 @@ fn fail(command: &str, message: impl std::fmt::Display) -> ExitCode {
 
 fn check_scenes(names: &[String]) -> Result<(), String> {
     for n in names {
-        if !SCENE_NAMES.contains(&n.as_str()) {
+        if !scenes::is_builtin(n) {
             return Err(format!(
-                "unknown scene '{n}' (built-in scenes: {})",
-                SCENE_NAMES.join(", ")
+                "unknown scene '{n}' (built-in scenes: {}; variants: {})",
+                SCENE_NAMES.join(", "),
+                scenes::VARIANT_NAMES.join(", ")
             ));
         }
     }
@@ -366,13 +369,12 @@ fn main() -> ExitCode {
                 (MethodKind::Nonlinear, Precision::F64) => Method::NonlinearF64,
                 (MethodKind::TessellationFree, Precision::F32) => Method::AffineF32,
                 (MethodKind::TessellationFree, Precision::F64) => Method::AffineF64,
+                (MethodKind::GeometryImage, Precision::F32) => Method::GeometryImageF32,
+                (MethodKind::GeometryImage, Precision::F64) => Method::GeometryImageF64,
                 (MethodKind::Tessellated, _) => Method::Tessellated,
             };
-            if !method.supports(&built) {
-                return fail(
-                    "render",
-                    format!("{method} renders height fields only; {scene} is shell-mapped"),
-                );
+            if let Some(why) = method.unsupported_reason(&built) {
+                return fail("render", format!("{method} cannot render {scene}: {why}"));
             }
             let opts = ReportOptions {
                 scenes: vec![scene.clone()],
@@ -521,7 +523,7 @@ fn main() -> ExitCode {
                     Some(MethodKind::TessellationFree) => {
                         matches!(m, Method::AffineF32 | Method::AffineF64)
                     }
-                    Some(MethodKind::Tessellated) => false,
+                    Some(MethodKind::Tessellated | MethodKind::GeometryImage) => false,
                     None => true,
                 };
                 precision_ok && method_ok

@@ -198,6 +198,8 @@ fn speed_against_error_svg(points: &[(Method, String, f64, ErrorStats)]) -> Stri
         Method::NonlinearF64 => "#ff9896",
         Method::AffineF32 => "#1f77b4",
         Method::AffineF64 => "#aec7e8",
+        Method::GeometryImageF32 => "#9467bd",
+        Method::GeometryImageF64 => "#c5b0d5",
         Method::Tessellated => "#2ca02c",
     };
     let series = |metric: &dyn Fn(&ErrorStats) -> f64| -> Vec<Series> {

@@ -102,6 +102,17 @@ pub const WATERTIGHT_SCENES: [&str; 5] = [
     "fig9-displaced",
 ];
 
+/// Built-in scene variants made for one measurement, not part of the default report:
+/// `mountain-grazing` (the mountain seen at grazing angles) and `fig9-displaced` (Fig. 9's
+/// columns with a height map), for `nlrt watertight`, and usable everywhere a scene is.
+pub const VARIANT_NAMES: [&str; 2] = ["mountain-grazing", "fig9-displaced"];
+
+/// Whether `name` is a built-in scene or variant.
+#[must_use]
+pub fn is_builtin(name: &str) -> bool {
+    SCENE_NAMES.contains(&name) || VARIANT_NAMES.contains(&name)
+}
+
 /// Sizes of a built-in scene: the paper's, or reduced for quick runs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Size {

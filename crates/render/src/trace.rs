@@ -4,6 +4,7 @@
 //! rays are measured as in the paper. Rays are generated and shaded in f64; only the
 //! intersection runs in the method's precision.
 
+use crate::resample::GeometryImageTracer;
 use crate::scenes::{Content, Scene};
 use crate::tessellate::Tessellated;
 use nlrt_accel::{DisplacedSurface, ShellObject, ShellSurface, TraversalStats};
@@ -26,17 +27,25 @@ pub enum Method {
     AffineF32,
     /// Tessellation-free displacement mapping in double precision; displacement only.
     AffineF64,
+    /// Geometry-image ray tracing (Carr et al. 2006: the displaced surface re-sampled on the
+    /// texel grid, a min-max pyramid of world boxes walked by hit/miss links) in single
+    /// precision; height fields on one uv chart only.
+    GeometryImageF32,
+    /// Geometry-image ray tracing in double precision.
+    GeometryImageF64,
     /// Pre-tessellated microtriangles in a world-space BVH (f64): the reference.
     Tessellated,
 }
 
 impl Method {
     /// All methods, reference last.
-    pub const ALL: [Method; 5] = [
+    pub const ALL: [Method; 7] = [
         Method::NonlinearF32,
         Method::NonlinearF64,
         Method::AffineF32,
         Method::AffineF64,
+        Method::GeometryImageF32,
+        Method::GeometryImageF64,
         Method::Tessellated,
     ];
 
@@ -48,6 +57,8 @@ impl Method {
             Method::NonlinearF64 => "nonlinear f64",
             Method::AffineF32 => "tessellation-free f32",
             Method::AffineF64 => "tessellation-free f64",
+            Method::GeometryImageF32 => "geometry image f32",
+            Method::GeometryImageF64 => "geometry image f64",
             Method::Tessellated => "pre-tessellated f64",
         }
     }
@@ -60,6 +71,8 @@ impl Method {
             Method::NonlinearF64 => "nonlinear-f64",
             Method::AffineF32 => "tessellation-free-f32",
             Method::AffineF64 => "tessellation-free-f64",
+            Method::GeometryImageF32 => "geometry-image-f32",
+            Method::GeometryImageF64 => "geometry-image-f64",
             Method::Tessellated => "tessellated-f64",
         }
     }
@@ -71,14 +84,26 @@ impl Method {
     }
 
     /// Whether the method can render `scene` (tessellation-free mapping handles height
-    /// fields only, not instanced objects).
+    /// fields only, not instanced objects; geometry images also need one uv chart over the
+    /// unit square with a power-of-two tiled map).
     #[must_use]
     pub fn supports(self, scene: &Scene) -> bool {
+        self.unsupported_reason(scene).is_none()
+    }
+
+    /// Why the method cannot render `scene`, or `None` when it can.
+    #[must_use]
+    pub fn unsupported_reason(self, scene: &Scene) -> Option<&'static str> {
         match self {
             Method::AffineF32 | Method::AffineF64 => {
-                matches!(scene.content, Content::Displacement(_))
+                (!matches!(scene.content, Content::Displacement(_))).then_some(
+                    "tessellation-free mapping renders height fields, not instanced objects",
+                )
             }
-            _ => true,
+            Method::GeometryImageF32 | Method::GeometryImageF64 => {
+                crate::resample::unsupported_reason(scene)
+            }
+            _ => None,
         }
     }
 
@@ -93,6 +118,8 @@ impl Method {
             Method::NonlinearF64 => Box::new(Nonlinear::<f64>::new(scene)),
             Method::AffineF32 => Box::new(TessellationFree::<f32>::new(scene)?),
             Method::AffineF64 => Box::new(TessellationFree::<f64>::new(scene)?),
+            Method::GeometryImageF32 => Box::new(GeometryImageTracer::<f32>::new(scene)?),
+            Method::GeometryImageF64 => Box::new(GeometryImageTracer::<f64>::new(scene)?),
             Method::Tessellated => Box::new(Tessellated::new(scene)),
         })
     }

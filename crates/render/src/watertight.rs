@@ -294,8 +294,10 @@ pub fn measure(scene: &Scene, rays_side: usize, method: Method) -> Result<LeakRe
         Method::NonlinearF64 => measure_in::<f64>(scene, rays_side, method),
         Method::AffineF32 => measure_in::<f32>(scene, rays_side, method),
         Method::AffineF64 => measure_in::<f64>(scene, rays_side, method),
-        Method::Tessellated => Err(format!(
-            "{method}: watertightness is measured for nonlinear and tessellation-free tracing"
+        Method::Tessellated | Method::GeometryImageF32 | Method::GeometryImageF64 => Err(format!(
+            "{method}: watertightness is measured for nonlinear and tessellation-free tracing \
+             (the reference and geometry images are other surfaces: flat triangles through \
+             re-sampled points, which need not lie above the base near its edges)"
         )),
     }
 }

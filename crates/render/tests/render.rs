@@ -302,3 +302,43 @@ fn fig9_displaced_columns_nonlinear_is_watertight_tessellation_free_leaks_where_
         }
     }
 }
+
+#[test]
+fn other_methods_agree_with_the_reference_where_the_surfaces_coincide() {
+    // The mountain's prisms are affine, and its texel grid's diagonals run along the base
+    // triangles' shared edge: tessellation-free mapping and the geometry image build exactly
+    // the reference's flat triangles, so f64 agrees to rounding (1e-12 relative, some 10^4
+    // ulps of slack for the different orders of operations) and f32 to f32 rounding times
+    // the conditioning of the hits (1e-5).
+    let scene = scenes::mountain(128);
+    let reference = render(&scene, &Tessellated::new(&scene), &small(), &|_| {});
+    for method in [
+        Method::AffineF32,
+        Method::AffineF64,
+        Method::GeometryImageF32,
+        Method::GeometryImageF64,
+    ] {
+        let tracer = method.build(&scene).expect("supported");
+        let frame = render(&scene, tracer.as_ref(), &small(), &|_| {});
+        let e = compare(&frame, &reference);
+        let bound = if method.name().ends_with("f32") {
+            1e-5
+        } else {
+            1e-12
+        };
+        assert!(e.mismatches <= 1, "{method}: {e:?}");
+        assert!(e.depth_max < bound, "{method}: {e:?}");
+    }
+}
+
+#[test]
+fn methods_refuse_scenes_they_cannot_represent() {
+    let out = nlrt(&["render", "fig9-displaced", "--method", "geometry-image"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("overlap"), "{err}");
+    let out = nlrt(&["render", "scales", "--method", "tessellation-free"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("height fields"), "{err}");
+}
