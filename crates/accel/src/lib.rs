@@ -43,6 +43,7 @@ mod cells;
 mod displacement;
 mod geometry_image;
 mod heightfield;
+mod march;
 mod mesh;
 mod shell;
 
@@ -54,5 +55,6 @@ pub use displacement::{
 };
 pub use geometry_image::{GeometryImage, GeometryImageError, GeometryImageHit};
 pub use heightfield::{HEIGHT_ONE, HeightField, HeightMapError, Wrap};
+pub use march::MarchOptions;
 pub use mesh::{BaseMesh, MeshError, prism_bounds};
 pub use shell::{ShellError, ShellHit, ShellObject, ShellSurface};

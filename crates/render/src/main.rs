@@ -37,6 +37,8 @@ enum MethodKind {
     TessellationFree,
     /// Geometry-image ray tracing (Carr et al. 2006); height fields on one uv chart only.
     GeometryImage,
+    /// Smooth shell mapping by ray marching (Jeschke et al. 2007); height fields only.
+    Marching,
     /// The pre-tessellated reference (f64).
     Tessellated,
 }
@@ -371,6 +373,8 @@ fn main() -> ExitCode {
                 (MethodKind::TessellationFree, Precision::F64) => Method::AffineF64,
                 (MethodKind::GeometryImage, Precision::F32) => Method::GeometryImageF32,
                 (MethodKind::GeometryImage, Precision::F64) => Method::GeometryImageF64,
+                (MethodKind::Marching, Precision::F32) => Method::MarchingF32,
+                (MethodKind::Marching, Precision::F64) => Method::MarchingF64,
                 (MethodKind::Tessellated, _) => Method::Tessellated,
             };
             if let Some(why) = method.unsupported_reason(&built) {
@@ -512,8 +516,8 @@ fn main() -> ExitCode {
             let side = ((rays as f64).sqrt().ceil() as usize).max(1);
             let methods = watertight::METHODS.into_iter().filter(|m| {
                 let precision_ok = match precision {
-                    Some(Precision::F32) => matches!(m, Method::NonlinearF32 | Method::AffineF32),
-                    Some(Precision::F64) => matches!(m, Method::NonlinearF64 | Method::AffineF64),
+                    Some(Precision::F32) => m.name().ends_with("f32"),
+                    Some(Precision::F64) => m.name().ends_with("f64"),
                     None => true,
                 };
                 let method_ok = match method {
@@ -522,6 +526,9 @@ fn main() -> ExitCode {
                     }
                     Some(MethodKind::TessellationFree) => {
                         matches!(m, Method::AffineF32 | Method::AffineF64)
+                    }
+                    Some(MethodKind::Marching) => {
+                        matches!(m, Method::MarchingF32 | Method::MarchingF64)
                     }
                     Some(MethodKind::Tessellated | MethodKind::GeometryImage) => false,
                     None => true,

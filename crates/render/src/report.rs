@@ -200,6 +200,8 @@ fn speed_against_error_svg(points: &[(Method, String, f64, ErrorStats)]) -> Stri
         Method::AffineF64 => "#aec7e8",
         Method::GeometryImageF32 => "#9467bd",
         Method::GeometryImageF64 => "#c5b0d5",
+        Method::MarchingF32 => "#ff7f0e",
+        Method::MarchingF64 => "#ffbb78",
         Method::Tessellated => "#2ca02c",
     };
     let series = |metric: &dyn Fn(&ErrorStats) -> f64| -> Vec<Series> {

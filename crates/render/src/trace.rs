@@ -7,7 +7,7 @@
 use crate::resample::GeometryImageTracer;
 use crate::scenes::{Content, Scene};
 use crate::tessellate::Tessellated;
-use nlrt_accel::{DisplacedSurface, ShellObject, ShellSurface, TraversalStats};
+use nlrt_accel::{DisplacedSurface, MarchOptions, ShellObject, ShellSurface, TraversalStats};
 use nlrt_poly::glam::DVec3;
 use nlrt_poly::{Real, Vector3};
 use nlrt_shellmap::Ray;
@@ -33,19 +33,27 @@ pub enum Method {
     GeometryImageF32,
     /// Geometry-image ray tracing in double precision.
     GeometryImageF64,
+    /// Smooth shell mapping by ray marching (Jeschke et al. 2007: canonical-space sampling
+    /// with image-space error correction, 2 samples per texel, binary-search refinement) in
+    /// single precision; height fields only.
+    MarchingF32,
+    /// Smooth shell mapping by ray marching in double precision.
+    MarchingF64,
     /// Pre-tessellated microtriangles in a world-space BVH (f64): the reference.
     Tessellated,
 }
 
 impl Method {
     /// All methods, reference last.
-    pub const ALL: [Method; 7] = [
+    pub const ALL: [Method; 9] = [
         Method::NonlinearF32,
         Method::NonlinearF64,
         Method::AffineF32,
         Method::AffineF64,
         Method::GeometryImageF32,
         Method::GeometryImageF64,
+        Method::MarchingF32,
+        Method::MarchingF64,
         Method::Tessellated,
     ];
 
@@ -59,6 +67,8 @@ impl Method {
             Method::AffineF64 => "tessellation-free f64",
             Method::GeometryImageF32 => "geometry image f32",
             Method::GeometryImageF64 => "geometry image f64",
+            Method::MarchingF32 => "ray marching f32",
+            Method::MarchingF64 => "ray marching f64",
             Method::Tessellated => "pre-tessellated f64",
         }
     }
@@ -73,6 +83,8 @@ impl Method {
             Method::AffineF64 => "tessellation-free-f64",
             Method::GeometryImageF32 => "geometry-image-f32",
             Method::GeometryImageF64 => "geometry-image-f64",
+            Method::MarchingF32 => "marching-f32",
+            Method::MarchingF64 => "marching-f64",
             Method::Tessellated => "tessellated-f64",
         }
     }
@@ -120,6 +132,8 @@ impl Method {
             Method::AffineF64 => Box::new(TessellationFree::<f64>::new(scene)?),
             Method::GeometryImageF32 => Box::new(GeometryImageTracer::<f32>::new(scene)?),
             Method::GeometryImageF64 => Box::new(GeometryImageTracer::<f64>::new(scene)?),
+            Method::MarchingF32 => Box::new(Marching::<f32>::new(scene)?),
+            Method::MarchingF64 => Box::new(Marching::<f64>::new(scene)?),
             Method::Tessellated => Box::new(Tessellated::new(scene)),
         })
     }
@@ -257,6 +271,47 @@ impl<T: Real> Tracer for TessellationFree<T> {
         let n = DisplacedSurface::affine_normal(&hit, ray.dir)?;
         Some(TraceHit {
             t: hit.t.to_f64(),
+            normal: DVec3::new(n.x().to_f64(), n.y().to_f64(), n.z().to_f64()),
+            id: hit.triangle,
+        })
+    }
+
+    fn memory_bytes(&self) -> usize {
+        self.0.memory_bytes()
+    }
+}
+
+/// Smooth shell mapping by ray marching (Jeschke et al. 2007) in precision `T`, on the same
+/// prisms and height field ([`DisplacedSurface::intersect_marching`]).
+pub struct Marching<T: Real>(DisplacedSurface<T>, MarchOptions);
+
+impl<T: Real> Marching<T> {
+    /// Builds the surface; `None` for scenes that are not height fields.
+    #[must_use]
+    pub fn new(scene: &Scene) -> Option<Self> {
+        match Nonlinear::<T>::new(scene) {
+            Nonlinear::Displaced(s) => Some(Self(s, MarchOptions::default())),
+            Nonlinear::Shell(_) => None,
+        }
+    }
+}
+
+impl<T: Real> Tracer for Marching<T> {
+    fn intersect(&self, origin: DVec3, dir: DVec3, t_min: f64, t_max: f64) -> Option<TraceHit> {
+        let v = |a: DVec3| T::Vec3::new(T::from_f64(a.x), T::from_f64(a.y), T::from_f64(a.z));
+        let ray = Ray::new(v(origin), v(dir))?;
+        let t_max = if t_max.is_finite() {
+            T::from_f64(t_max)
+        } else {
+            T::INFINITY
+        };
+        let mut stats = TraversalStats::default();
+        let hit =
+            self.0
+                .intersect_marching(&ray, T::from_f64(t_min), t_max, &self.1, &mut stats)?;
+        let n = self.0.normal(&hit, ray.dir)?;
+        Some(TraceHit {
+            t: hit.hit.t.to_f64(),
             normal: DVec3::new(n.x().to_f64(), n.y().to_f64(), n.z().to_f64()),
             id: hit.triangle,
         })

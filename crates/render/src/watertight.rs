@@ -21,7 +21,7 @@
 
 use crate::scenes::{Content, Scene};
 use crate::trace::{Method, Nonlinear};
-use nlrt_accel::{Aabb, Bvh4, SlabRay, TraversalStats, Wrap};
+use nlrt_accel::{Aabb, Bvh4, MarchOptions, SlabRay, TraversalStats, Wrap};
 use nlrt_oracle::crossing::ray_triangle;
 use nlrt_poly::glam::{DVec2, DVec3};
 use nlrt_poly::{Real, Vector2, Vector3};
@@ -36,11 +36,13 @@ use rayon::prelude::*;
 pub const LEAK_TOLERANCE: f64 = 1e-4;
 
 /// The methods whose leaks are measured, in report order.
-pub const METHODS: [Method; 4] = [
+pub const METHODS: [Method; 6] = [
     Method::NonlinearF32,
     Method::NonlinearF64,
     Method::AffineF32,
     Method::AffineF64,
+    Method::MarchingF32,
+    Method::MarchingF64,
 ];
 
 /// The outcome for one ray.
@@ -294,6 +296,8 @@ pub fn measure(scene: &Scene, rays_side: usize, method: Method) -> Result<LeakRe
         Method::NonlinearF64 => measure_in::<f64>(scene, rays_side, method),
         Method::AffineF32 => measure_in::<f32>(scene, rays_side, method),
         Method::AffineF64 => measure_in::<f64>(scene, rays_side, method),
+        Method::MarchingF32 => measure_in::<f32>(scene, rays_side, method),
+        Method::MarchingF64 => measure_in::<f64>(scene, rays_side, method),
         Method::Tessellated | Method::GeometryImageF32 | Method::GeometryImageF64 => Err(format!(
             "{method}: watertightness is measured for nonlinear and tessellation-free tracing \
              (the reference and geometry images are other surfaces: flat triangles through \
@@ -315,6 +319,7 @@ fn measure_in<T: Real>(
     }
     let start = std::time::Instant::now();
     let affine = matches!(method, Method::AffineF32 | Method::AffineF64);
+    let marching = matches!(method, Method::MarchingF32 | Method::MarchingF64);
     let tracer = Nonlinear::<T>::new(scene);
     let Nonlinear::Displaced(surface) = &tracer else {
         unreachable!("displacement scene")
@@ -392,7 +397,11 @@ fn measure_in<T: Real>(
                 return Verdict::NotDecided;
             }
             let mut stats = TraversalStats::default();
-            let hit = if affine {
+            let hit = if marching {
+                surface
+                    .intersect_marching(&ray, T::ZERO, T::INFINITY, &MarchOptions::default(), &mut stats)
+                    .map(|h| (h.hit.t, h.triangle, h.texel, h.part, h.hit.h))
+            } else if affine {
                 surface
                     .intersect_affine(&ray, T::ZERO, T::INFINITY, &mut stats)
                     .map(|h| (h.t, h.triangle, h.texel, h.part, T::NAN))
@@ -423,7 +432,7 @@ fn measure_in<T: Real>(
         .iter()
         .filter(|v| matches!(v, Verdict::Leak(_)))
         .count();
-    let distance_error = (!affine).then(|| distance_error(scene, surface, n));
+    let distance_error = (!affine && !marching).then(|| distance_error(scene, surface, n));
     Ok(LeakReport {
         method,
         distance_error,
