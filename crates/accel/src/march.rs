@@ -174,9 +174,16 @@ impl<T: Real> DisplacedSurface<T> {
         let (uv0, uv1) = (uv(&start), uv(&end));
         let texels =
             ((uv1.x() - uv0.x()).abs().max((uv1.y() - uv0.y()).abs()) / self.texel_size).to_f64();
-        let count = ((texels * opts.samples_per_texel).ceil() as usize + 1)
-            .clamp(2, opts.max_samples.max(2));
-        let cos_limit = T::from_f64(opts.max_angle.cos());
+        // ceil without std: samples for the texels crossed, plus the end point.
+        let wanted = texels * opts.samples_per_texel;
+        let whole = wanted as usize;
+        let steps = if (whole as f64) < wanted {
+            whole + 1
+        } else {
+            whole
+        };
+        let count = (steps + 1).clamp(2, opts.max_samples.max(2));
+        let cos_limit = T::from_f64(opts.max_angle).cos();
         let inside = |c: &[T; 3]| c[0] >= T::ZERO && c[1] >= T::ZERO && c[0] + c[1] <= T::ONE;
         let below = |c: &[T; 3]| {
             let p = uv(c);
