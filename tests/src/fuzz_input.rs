@@ -272,6 +272,18 @@ pub fn fuzz_displacement<T: Real>(data: &[u8]) {
             "accelerated {f:?} nearer than brute force {b:?}"
         );
     }
+    // The competing methods on the same surface: no panic, and any hit finite and ahead.
+    let mut stats = TraversalStats::default();
+    if let Some(h) = surface.intersect_affine(&ray, T::ZERO, T::INFINITY, &mut stats) {
+        assert!(h.t.is_finite() && h.t > T::ZERO, "tessellation-free {h:?}");
+    }
+    let opts = nlrt_accel::MarchOptions {
+        max_samples: 256,
+        ..nlrt_accel::MarchOptions::default()
+    };
+    if let Some(h) = surface.intersect_marching(&ray, T::ZERO, T::INFINITY, &opts, &mut stats) {
+        assert!(h.hit.t.is_finite() && h.hit.t > T::ZERO, "marching {h:?}");
+    }
 }
 
 /// The shell traversal target: up to four object triangles in the unit tile (raw values;
