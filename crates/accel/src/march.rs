@@ -174,8 +174,9 @@ impl<T: Real> DisplacedSurface<T> {
         let (uv0, uv1) = (uv(&start), uv(&end));
         let texels =
             ((uv1.x() - uv0.x()).abs().max((uv1.y() - uv0.y()).abs()) / self.texel_size).to_f64();
-        // ceil without std: samples for the texels crossed, plus the end point.
-        let wanted = texels * opts.samples_per_texel;
+        // ceil without std: samples for the texels crossed, plus the end point; capped first
+        // (an infinite or NaN span, from a degenerate prism, becomes the cap).
+        let wanted = (texels * opts.samples_per_texel).min(opts.max_samples as f64);
         let whole = wanted as usize;
         let steps = if (whole as f64) < wanted {
             whole + 1
