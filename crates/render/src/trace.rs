@@ -115,7 +115,12 @@ impl Method {
             Method::GeometryImageF32 | Method::GeometryImageF64 => {
                 crate::resample::unsupported_reason(scene)
             }
-            _ => None,
+            Method::MarchingF32 | Method::MarchingF64 => {
+                (!matches!(scene.content, Content::Displacement(_))).then_some(
+                    "ray marching is implemented for height fields (no distance maps for objects)",
+                )
+            }
+            Method::NonlinearF32 | Method::NonlinearF64 | Method::Tessellated => None,
         }
     }
 

@@ -337,8 +337,24 @@ fn methods_refuse_scenes_they_cannot_represent() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{err}");
     assert!(err.contains("overlap"), "{err}");
-    let out = nlrt(&["render", "scales", "--method", "tessellation-free"]);
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(2), "{err}");
-    assert!(err.contains("height fields"), "{err}");
+    for method in ["tessellation-free", "marching", "geometry-image"] {
+        let out = nlrt(&["render", "scales", "--method", method]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{err}");
+        assert!(err.contains("height fields"), "{method}: {err}");
+    }
+    // Every method builds for every built-in scene it says it supports, and for no other.
+    for name in scenes::SCENE_NAMES {
+        let scene = scenes::builtin(name, scenes::Size::Small).unwrap();
+        for method in Method::ALL {
+            if method == Method::Tessellated {
+                continue; // slow; supports everything
+            }
+            assert_eq!(
+                method.build(&scene).is_some(),
+                method.supports(&scene),
+                "{method} on {name}"
+            );
+        }
+    }
 }
