@@ -46,6 +46,7 @@ mod heightfield;
 mod march;
 mod mesh;
 mod shell;
+mod tetra;
 
 pub use affine::AffineHit;
 pub use bvh::{ARITY, Aabb, Bvh4, Node4, SlabRay};

@@ -94,7 +94,7 @@ fn world_to_canonical_bisect<T: Real>(prism: &Prism<T>, p: T::Vec3) -> Option<[T
 impl<T: Real> DisplacedSurface<T> {
     /// The height of the surface at texture point `(u, v)` and which part of which texel
     /// holds it (the microtriangles of [`DisplacedSurface::intersect`]).
-    fn surface_height(&self, u: T, v: T) -> (T, [i32; 2], TexelPart) {
+    pub(crate) fn surface_height(&self, u: T, v: T) -> (T, [i32; 2], TexelPart) {
         let (fu, fv) = (u / self.texel_size, v / self.texel_size);
         let floor = |x: T| {
             let i = x.to_f64() as i32;

@@ -39,6 +39,8 @@ enum MethodKind {
     GeometryImage,
     /// Smooth shell mapping by ray marching (Jeschke et al. 2007); height fields only.
     Marching,
+    /// Tetrahedral shells (piecewise-linear mapping); height fields only.
+    Tetrahedra,
     /// The pre-tessellated reference (f64).
     Tessellated,
 }
@@ -375,6 +377,8 @@ fn main() -> ExitCode {
                 (MethodKind::GeometryImage, Precision::F64) => Method::GeometryImageF64,
                 (MethodKind::Marching, Precision::F32) => Method::MarchingF32,
                 (MethodKind::Marching, Precision::F64) => Method::MarchingF64,
+                (MethodKind::Tetrahedra, Precision::F32) => Method::TetrahedraF32,
+                (MethodKind::Tetrahedra, Precision::F64) => Method::TetrahedraF64,
                 (MethodKind::Tessellated, _) => Method::Tessellated,
             };
             if let Some(why) = method.unsupported_reason(&built) {
@@ -529,6 +533,9 @@ fn main() -> ExitCode {
                     }
                     Some(MethodKind::Marching) => {
                         matches!(m, Method::MarchingF32 | Method::MarchingF64)
+                    }
+                    Some(MethodKind::Tetrahedra) => {
+                        matches!(m, Method::TetrahedraF32 | Method::TetrahedraF64)
                     }
                     Some(MethodKind::Tessellated | MethodKind::GeometryImage) => false,
                     None => true,

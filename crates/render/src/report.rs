@@ -202,6 +202,8 @@ fn speed_against_error_svg(points: &[(Method, String, f64, ErrorStats)]) -> Stri
         Method::GeometryImageF64 => "#c5b0d5",
         Method::MarchingF32 => "#ff7f0e",
         Method::MarchingF64 => "#ffbb78",
+        Method::TetrahedraF32 => "#8c564b",
+        Method::TetrahedraF64 => "#c49c94",
         Method::Tessellated => "#2ca02c",
     };
     let series = |metric: &dyn Fn(&ErrorStats) -> f64| -> Vec<Series> {

@@ -39,13 +39,19 @@ pub enum Method {
     MarchingF32,
     /// Smooth shell mapping by ray marching in double precision.
     MarchingF64,
+    /// Tetrahedral shells (Porumbescu et al. 2005: each prism split into three tetrahedra with
+    /// consistent diagonals, a piecewise-linear map, sampled like marching) in single
+    /// precision; height fields only.
+    TetrahedraF32,
+    /// Tetrahedral shells in double precision.
+    TetrahedraF64,
     /// Pre-tessellated microtriangles in a world-space BVH (f64): the reference.
     Tessellated,
 }
 
 impl Method {
     /// All methods, reference last.
-    pub const ALL: [Method; 9] = [
+    pub const ALL: [Method; 11] = [
         Method::NonlinearF32,
         Method::NonlinearF64,
         Method::AffineF32,
@@ -54,6 +60,8 @@ impl Method {
         Method::GeometryImageF64,
         Method::MarchingF32,
         Method::MarchingF64,
+        Method::TetrahedraF32,
+        Method::TetrahedraF64,
         Method::Tessellated,
     ];
 
@@ -69,6 +77,8 @@ impl Method {
             Method::GeometryImageF64 => "geometry image f64",
             Method::MarchingF32 => "ray marching f32",
             Method::MarchingF64 => "ray marching f64",
+            Method::TetrahedraF32 => "tetrahedra f32",
+            Method::TetrahedraF64 => "tetrahedra f64",
             Method::Tessellated => "pre-tessellated f64",
         }
     }
@@ -85,6 +95,8 @@ impl Method {
             Method::GeometryImageF64 => "geometry-image-f64",
             Method::MarchingF32 => "marching-f32",
             Method::MarchingF64 => "marching-f64",
+            Method::TetrahedraF32 => "tetrahedra-f32",
+            Method::TetrahedraF64 => "tetrahedra-f64",
             Method::Tessellated => "tessellated-f64",
         }
     }
@@ -120,6 +132,11 @@ impl Method {
                     "ray marching is implemented for height fields (no distance maps for objects)",
                 )
             }
+            Method::TetrahedraF32 | Method::TetrahedraF64 => {
+                (!matches!(scene.content, Content::Displacement(_))).then_some(
+                    "tetrahedral shells are implemented for height fields, not instanced objects",
+                )
+            }
             Method::NonlinearF32 | Method::NonlinearF64 | Method::Tessellated => None,
         }
     }
@@ -139,6 +156,8 @@ impl Method {
             Method::GeometryImageF64 => Box::new(GeometryImageTracer::<f64>::new(scene)?),
             Method::MarchingF32 => Box::new(Marching::<f32>::new(scene)?),
             Method::MarchingF64 => Box::new(Marching::<f64>::new(scene)?),
+            Method::TetrahedraF32 => Box::new(Marching::<f32>::tetrahedra(scene)?),
+            Method::TetrahedraF64 => Box::new(Marching::<f64>::tetrahedra(scene)?),
             Method::Tessellated => Box::new(Tessellated::new(scene)),
         })
     }
@@ -286,18 +305,36 @@ impl<T: Real> Tracer for TessellationFree<T> {
     }
 }
 
-/// Smooth shell mapping by ray marching (Jeschke et al. 2007) in precision `T`, on the same
-/// prisms and height field ([`DisplacedSurface::intersect_marching`]).
-pub struct Marching<T: Real>(DisplacedSurface<T>, MarchOptions);
+/// Sampling methods in precision `T` on the same prisms and height field: smooth shell
+/// mapping by ray marching (Jeschke et al. 2007, [`DisplacedSurface::intersect_marching`]) or
+/// tetrahedral shells ([`DisplacedSurface::intersect_tetrahedra`]).
+pub struct Marching<T: Real> {
+    surface: DisplacedSurface<T>,
+    opts: MarchOptions,
+    tetrahedra: bool,
+}
 
 impl<T: Real> Marching<T> {
-    /// Builds the surface; `None` for scenes that are not height fields.
+    /// Ray marching; `None` for scenes that are not height fields.
     #[must_use]
     pub fn new(scene: &Scene) -> Option<Self> {
         match Nonlinear::<T>::new(scene) {
-            Nonlinear::Displaced(s) => Some(Self(s, MarchOptions::default())),
+            Nonlinear::Displaced(surface) => Some(Self {
+                surface,
+                opts: MarchOptions::default(),
+                tetrahedra: false,
+            }),
             Nonlinear::Shell(_) => None,
         }
+    }
+
+    /// Tetrahedral shells; `None` for scenes that are not height fields.
+    #[must_use]
+    pub fn tetrahedra(scene: &Scene) -> Option<Self> {
+        Self::new(scene).map(|m| Self {
+            tetrahedra: true,
+            ..m
+        })
     }
 }
 
@@ -311,10 +348,15 @@ impl<T: Real> Tracer for Marching<T> {
             T::INFINITY
         };
         let mut stats = TraversalStats::default();
-        let hit =
-            self.0
-                .intersect_marching(&ray, T::from_f64(t_min), t_max, &self.1, &mut stats)?;
-        let n = self.0.normal(&hit, ray.dir)?;
+        let t_min = T::from_f64(t_min);
+        let hit = if self.tetrahedra {
+            self.surface
+                .intersect_tetrahedra(&ray, t_min, t_max, &self.opts, &mut stats)?
+        } else {
+            self.surface
+                .intersect_marching(&ray, t_min, t_max, &self.opts, &mut stats)?
+        };
+        let n = self.surface.normal(&hit, ray.dir)?;
         Some(TraceHit {
             t: hit.hit.t.to_f64(),
             normal: DVec3::new(n.x().to_f64(), n.y().to_f64(), n.z().to_f64()),
@@ -323,7 +365,7 @@ impl<T: Real> Tracer for Marching<T> {
     }
 
     fn memory_bytes(&self) -> usize {
-        self.0.memory_bytes()
+        self.surface.memory_bytes()
     }
 }
 

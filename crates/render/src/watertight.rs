@@ -36,13 +36,15 @@ use rayon::prelude::*;
 pub const LEAK_TOLERANCE: f64 = 1e-4;
 
 /// The methods whose leaks are measured, in report order.
-pub const METHODS: [Method; 6] = [
+pub const METHODS: [Method; 8] = [
     Method::NonlinearF32,
     Method::NonlinearF64,
     Method::AffineF32,
     Method::AffineF64,
     Method::MarchingF32,
     Method::MarchingF64,
+    Method::TetrahedraF32,
+    Method::TetrahedraF64,
 ];
 
 /// The outcome for one ray.
@@ -298,6 +300,8 @@ pub fn measure(scene: &Scene, rays_side: usize, method: Method) -> Result<LeakRe
         Method::AffineF64 => measure_in::<f64>(scene, rays_side, method),
         Method::MarchingF32 => measure_in::<f32>(scene, rays_side, method),
         Method::MarchingF64 => measure_in::<f64>(scene, rays_side, method),
+        Method::TetrahedraF32 => measure_in::<f32>(scene, rays_side, method),
+        Method::TetrahedraF64 => measure_in::<f64>(scene, rays_side, method),
         Method::Tessellated | Method::GeometryImageF32 | Method::GeometryImageF64 => Err(format!(
             "{method}: watertightness is measured for nonlinear and tessellation-free tracing \
              (the reference and geometry images are other surfaces: flat triangles through \
@@ -320,6 +324,7 @@ fn measure_in<T: Real>(
     let start = std::time::Instant::now();
     let affine = matches!(method, Method::AffineF32 | Method::AffineF64);
     let marching = matches!(method, Method::MarchingF32 | Method::MarchingF64);
+    let tetrahedra = matches!(method, Method::TetrahedraF32 | Method::TetrahedraF64);
     let tracer = Nonlinear::<T>::new(scene);
     let Nonlinear::Displaced(surface) = &tracer else {
         unreachable!("displacement scene")
@@ -397,7 +402,17 @@ fn measure_in<T: Real>(
                 return Verdict::NotDecided;
             }
             let mut stats = TraversalStats::default();
-            let hit = if marching {
+            let hit = if tetrahedra {
+                surface
+                    .intersect_tetrahedra(
+                        &ray,
+                        T::ZERO,
+                        T::INFINITY,
+                        &MarchOptions::default(),
+                        &mut stats,
+                    )
+                    .map(|h| (h.hit.t, h.triangle, h.texel, h.part, h.hit.h))
+            } else if marching {
                 surface
                     .intersect_marching(&ray, T::ZERO, T::INFINITY, &MarchOptions::default(), &mut stats)
                     .map(|h| (h.hit.t, h.triangle, h.texel, h.part, h.hit.h))
@@ -432,7 +447,8 @@ fn measure_in<T: Real>(
         .iter()
         .filter(|v| matches!(v, Verdict::Leak(_)))
         .count();
-    let distance_error = (!affine && !marching).then(|| distance_error(scene, surface, n));
+    let nonlinear = !(affine || marching || tetrahedra);
+    let distance_error = nonlinear.then(|| distance_error(scene, surface, n));
     Ok(LeakReport {
         method,
         distance_error,
