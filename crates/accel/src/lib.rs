@@ -45,6 +45,7 @@ mod geometry_image;
 mod heightfield;
 mod march;
 mod mesh;
+mod projective;
 mod shell;
 mod tetra;
 
@@ -58,4 +59,5 @@ pub use geometry_image::{GeometryImage, GeometryImageError, GeometryImageHit};
 pub use heightfield::{HEIGHT_ONE, HeightField, HeightMapError, Wrap};
 pub use march::MarchOptions;
 pub use mesh::{BaseMesh, MeshError, prism_bounds};
+pub use projective::ProjectiveSurface;
 pub use shell::{ShellError, ShellHit, ShellObject, ShellSurface};

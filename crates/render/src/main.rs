@@ -41,6 +41,8 @@ enum MethodKind {
     Marching,
     /// Tetrahedral shells (piecewise-linear mapping); height fields only.
     Tetrahedra,
+    /// Projective displacement mapping (parallel offset prisms); height fields only.
+    Projective,
     /// The pre-tessellated reference (f64).
     Tessellated,
 }
@@ -379,6 +381,8 @@ fn main() -> ExitCode {
                 (MethodKind::Marching, Precision::F64) => Method::MarchingF64,
                 (MethodKind::Tetrahedra, Precision::F32) => Method::TetrahedraF32,
                 (MethodKind::Tetrahedra, Precision::F64) => Method::TetrahedraF64,
+                (MethodKind::Projective, Precision::F32) => Method::ProjectiveF32,
+                (MethodKind::Projective, Precision::F64) => Method::ProjectiveF64,
                 (MethodKind::Tessellated, _) => Method::Tessellated,
             };
             if let Some(why) = method.unsupported_reason(&built) {
@@ -537,7 +541,11 @@ fn main() -> ExitCode {
                     Some(MethodKind::Tetrahedra) => {
                         matches!(m, Method::TetrahedraF32 | Method::TetrahedraF64)
                     }
-                    Some(MethodKind::Tessellated | MethodKind::GeometryImage) => false,
+                    Some(
+                        MethodKind::Tessellated
+                        | MethodKind::GeometryImage
+                        | MethodKind::Projective,
+                    ) => false,
                     None => true,
                 };
                 precision_ok && method_ok

@@ -204,6 +204,8 @@ fn speed_against_error_svg(points: &[(Method, String, f64, ErrorStats)]) -> Stri
         Method::MarchingF64 => "#ffbb78",
         Method::TetrahedraF32 => "#8c564b",
         Method::TetrahedraF64 => "#c49c94",
+        Method::ProjectiveF32 => "#e377c2",
+        Method::ProjectiveF64 => "#f7b6d2",
         Method::Tessellated => "#2ca02c",
     };
     let series = |metric: &dyn Fn(&ErrorStats) -> f64| -> Vec<Series> {

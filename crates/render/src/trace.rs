@@ -7,7 +7,9 @@
 use crate::resample::GeometryImageTracer;
 use crate::scenes::{Content, Scene};
 use crate::tessellate::Tessellated;
-use nlrt_accel::{DisplacedSurface, MarchOptions, ShellObject, ShellSurface, TraversalStats};
+use nlrt_accel::{
+    DisplacedSurface, MarchOptions, ProjectiveSurface, ShellObject, ShellSurface, TraversalStats,
+};
 use nlrt_poly::glam::DVec3;
 use nlrt_poly::{Real, Vector3};
 use nlrt_shellmap::Ray;
@@ -45,13 +47,19 @@ pub enum Method {
     TetrahedraF32,
     /// Tetrahedral shells in double precision.
     TetrahedraF64,
+    /// Projective displacement mapping (parallel offset prisms, world-space samples projected
+    /// linearly to texture space, jittered first sample, no bottom-level structure) in single
+    /// precision; height fields only.
+    ProjectiveF32,
+    /// Projective displacement mapping in double precision.
+    ProjectiveF64,
     /// Pre-tessellated microtriangles in a world-space BVH (f64): the reference.
     Tessellated,
 }
 
 impl Method {
     /// All methods, reference last.
-    pub const ALL: [Method; 11] = [
+    pub const ALL: [Method; 13] = [
         Method::NonlinearF32,
         Method::NonlinearF64,
         Method::AffineF32,
@@ -62,6 +70,8 @@ impl Method {
         Method::MarchingF64,
         Method::TetrahedraF32,
         Method::TetrahedraF64,
+        Method::ProjectiveF32,
+        Method::ProjectiveF64,
         Method::Tessellated,
     ];
 
@@ -79,6 +89,8 @@ impl Method {
             Method::MarchingF64 => "ray marching f64",
             Method::TetrahedraF32 => "tetrahedra f32",
             Method::TetrahedraF64 => "tetrahedra f64",
+            Method::ProjectiveF32 => "projective f32",
+            Method::ProjectiveF64 => "projective f64",
             Method::Tessellated => "pre-tessellated f64",
         }
     }
@@ -97,6 +109,8 @@ impl Method {
             Method::MarchingF64 => "marching-f64",
             Method::TetrahedraF32 => "tetrahedra-f32",
             Method::TetrahedraF64 => "tetrahedra-f64",
+            Method::ProjectiveF32 => "projective-f32",
+            Method::ProjectiveF64 => "projective-f64",
             Method::Tessellated => "tessellated-f64",
         }
     }
@@ -132,6 +146,11 @@ impl Method {
                     "ray marching is implemented for height fields (no distance maps for objects)",
                 )
             }
+            Method::ProjectiveF32 | Method::ProjectiveF64 => {
+                (!matches!(scene.content, Content::Displacement(_))).then_some(
+                    "projective displacement mapping renders height fields, not instanced objects",
+                )
+            }
             Method::TetrahedraF32 | Method::TetrahedraF64 => {
                 (!matches!(scene.content, Content::Displacement(_))).then_some(
                     "tetrahedral shells are implemented for height fields, not instanced objects",
@@ -158,6 +177,8 @@ impl Method {
             Method::MarchingF64 => Box::new(Marching::<f64>::new(scene)?),
             Method::TetrahedraF32 => Box::new(Marching::<f32>::tetrahedra(scene)?),
             Method::TetrahedraF64 => Box::new(Marching::<f64>::tetrahedra(scene)?),
+            Method::ProjectiveF32 => Box::new(Projective::<f32>::new(scene)?),
+            Method::ProjectiveF64 => Box::new(Projective::<f64>::new(scene)?),
             Method::Tessellated => Box::new(Tessellated::new(scene)),
         })
     }
@@ -357,6 +378,70 @@ impl<T: Real> Tracer for Marching<T> {
                 .intersect_marching(&ray, t_min, t_max, &self.opts, &mut stats)?
         };
         let n = self.surface.normal(&hit, ray.dir)?;
+        Some(TraceHit {
+            t: hit.hit.t.to_f64(),
+            normal: DVec3::new(n.x().to_f64(), n.y().to_f64(), n.z().to_f64()),
+            id: hit.triangle,
+        })
+    }
+
+    fn memory_bytes(&self) -> usize {
+        self.surface.memory_bytes()
+    }
+}
+
+/// Projective displacement mapping in precision `T` ([`ProjectiveSurface`]); the first
+/// sample of each ray is jittered by a hash of the ray (thin-feature sampling).
+pub struct Projective<T: Real> {
+    surface: ProjectiveSurface<T>,
+    opts: MarchOptions,
+}
+
+impl<T: Real> Projective<T> {
+    /// Builds the parallel prisms; `None` for scenes that are not height fields.
+    #[must_use]
+    pub fn new(scene: &Scene) -> Option<Self> {
+        let Content::Displacement(field) = &scene.content else {
+            return None;
+        };
+        let surface = ProjectiveSurface::new(
+            &scene.mesh::<T>(),
+            field.clone(),
+            T::from_f64(scene.height_scale),
+            T::from_f64(scene.tiling),
+        )
+        .ok()?;
+        Some(Self {
+            surface,
+            opts: MarchOptions::default(),
+        })
+    }
+}
+
+impl<T: Real> Tracer for Projective<T> {
+    fn intersect(&self, origin: DVec3, dir: DVec3, t_min: f64, t_max: f64) -> Option<TraceHit> {
+        let v = |a: DVec3| T::Vec3::new(T::from_f64(a.x), T::from_f64(a.y), T::from_f64(a.z));
+        let ray = Ray::new(v(origin), v(dir))?;
+        let t_max = if t_max.is_finite() {
+            T::from_f64(t_max)
+        } else {
+            T::INFINITY
+        };
+        let mut hash = Rng(origin.x.to_bits()
+            ^ dir.x.to_bits().rotate_left(21)
+            ^ dir.y.to_bits().rotate_left(42)
+            ^ dir.z.to_bits());
+        let jitter = T::from_f64(hash.next());
+        let mut stats = TraversalStats::default();
+        let hit = self.surface.intersect(
+            &ray,
+            T::from_f64(t_min),
+            t_max,
+            jitter,
+            &self.opts,
+            &mut stats,
+        )?;
+        let n = self.surface.surface().normal(&hit, ray.dir)?;
         Some(TraceHit {
             t: hit.hit.t.to_f64(),
             normal: DVec3::new(n.x().to_f64(), n.y().to_f64(), n.z().to_f64()),

@@ -302,10 +302,15 @@ pub fn measure(scene: &Scene, rays_side: usize, method: Method) -> Result<LeakRe
         Method::MarchingF64 => measure_in::<f64>(scene, rays_side, method),
         Method::TetrahedraF32 => measure_in::<f32>(scene, rays_side, method),
         Method::TetrahedraF64 => measure_in::<f64>(scene, rays_side, method),
-        Method::Tessellated | Method::GeometryImageF32 | Method::GeometryImageF64 => Err(format!(
+        Method::Tessellated
+        | Method::GeometryImageF32
+        | Method::GeometryImageF64
+        | Method::ProjectiveF32
+        | Method::ProjectiveF64 => Err(format!(
             "{method}: watertightness is measured for nonlinear and tessellation-free tracing \
              (the reference and geometry images are other surfaces: flat triangles through \
-             re-sampled points, which need not lie above the base near its edges)"
+             re-sampled points, which need not lie above the base near its edges; projective \
+             mapping displaces over other prisms)"
         )),
     }
 }
