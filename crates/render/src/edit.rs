@@ -215,7 +215,8 @@ pub fn markdown(r: &EditReport) -> String {
          | method | what an edit costs | time to traceable |\n|---|---|---|\n\
          | nonlinear (f32/f64) | partial min-max update over the stroke | {} (max {}) |\n\
          | tessellation-free (f32/f64) | the same pyramid, the same update | {} |\n\
-         | either, without partial updates | full pyramid rebuild | {} |\n",
+         | either, without partial updates | full pyramid rebuild | {} |\n\
+         | ray marching, tetrahedra, projective (f32/f64) | nothing: they read the samples only | 0 |\n",
         ms(r.partial_seconds),
         ms(r.partial_max_seconds),
         ms(r.partial_seconds),
