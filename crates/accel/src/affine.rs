@@ -14,7 +14,7 @@
 use nlrt_poly::{Real, Vector3};
 use nlrt_shellmap::{Prism, Ray};
 
-use crate::bvh::SlabRay;
+use crate::bvh::{SlabRay, ray_triangle};
 use crate::cells::{facing_unit, traverse_cells, uv_in_cells};
 use crate::displacement::{DisplacedSurface, TexelPart, TraversalStats};
 
@@ -161,29 +161,6 @@ impl<T: Real> AffineShell<T> {
     }
 }
 
-/// Möller-Trumbore: `(t, b1, b2)` of the ray's crossing of the triangle (edges included).
-#[inline]
-fn ray_triangle<T: Real>(tri: &[T::Vec3; 3], ray: &Ray<T>) -> Option<(T, T, T)> {
-    let (e1, e2) = (tri[1] - tri[0], tri[2] - tri[0]);
-    let p = ray.dir.cross(e2);
-    let det = e1.dot(p);
-    if !(det != T::ZERO && det.is_finite()) {
-        return None;
-    }
-    let inv = T::ONE / det;
-    let s = ray.origin - tri[0];
-    let b1 = s.dot(p) * inv;
-    if !(b1 >= T::ZERO && b1 <= T::ONE) {
-        return None;
-    }
-    let q = s.cross(e1);
-    let b2 = ray.dir.dot(q) * inv;
-    if !(b2 >= T::ZERO && b1 + b2 <= T::ONE) {
-        return None;
-    }
-    Some((e2.dot(q) * inv, b1, b2))
-}
-
 impl<T: Real> DisplacedSurface<T> {
     /// The nearest hit of `ray` with `t` in `[t_min, t_max]` by tessellation-free
     /// displacement mapping (Thonat et al. 2021): TLAS, then per base triangle the implicit
@@ -284,7 +261,7 @@ impl<T: Real> DisplacedSurface<T> {
         let mut best: Option<AffineHit<T>> = None;
         for (part, [a, b, c]) in [(TexelPart::Lower, [0, 1, 2]), (TexelPart::Upper, [0, 2, 3])] {
             let tri = [corners[a].1, corners[b].1, corners[c].1];
-            let Some((t, b1, b2)) = ray_triangle(&tri, ray) else {
+            let Some((t, b1, b2)) = ray_triangle(&tri, ray.origin, ray.dir) else {
                 continue;
             };
             let limit = best.map_or(t_max, |h| h.t);

@@ -555,6 +555,37 @@ fn collapse<T: Real>(binary: &[Binary<T>], b: usize, nodes: &mut Vec<Node4<T>>) 
     me as u32
 }
 
+/// Möller-Trumbore: `(t, b1, b2)` of the crossing of the ray `origin + t dir` with the flat
+/// triangle `tri` (edges included; `b1`, `b2` the weights of vertices 1 and 2); `None` when
+/// the ray is parallel to it, misses it, or an input is not finite. Not watertight: two
+/// triangles sharing an edge decide it independently (the methods that use it say so).
+#[must_use]
+#[inline]
+pub fn ray_triangle<T: Real>(
+    tri: &[T::Vec3; 3],
+    origin: T::Vec3,
+    dir: T::Vec3,
+) -> Option<(T, T, T)> {
+    let (e1, e2) = (tri[1] - tri[0], tri[2] - tri[0]);
+    let p = dir.cross(e2);
+    let det = e1.dot(p);
+    if !(det != T::ZERO && det.is_finite()) {
+        return None;
+    }
+    let inv = T::ONE / det;
+    let s = origin - tri[0];
+    let b1 = s.dot(p) * inv;
+    if !(b1 >= T::ZERO && b1 <= T::ONE) {
+        return None;
+    }
+    let q = s.cross(e1);
+    let b2 = dir.dot(q) * inv;
+    if !(b2 >= T::ZERO && b1 + b2 <= T::ONE) {
+        return None;
+    }
+    Some((e2.dot(q) * inv, b1, b2))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -13,7 +13,7 @@ use alloc::vec::Vec;
 use nlrt_poly::{Real, Vector3};
 use nlrt_shellmap::Ray;
 
-use crate::bvh::{Aabb, SlabRay};
+use crate::bvh::{Aabb, SlabRay, ray_triangle};
 
 /// Why a geometry image was rejected.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -229,7 +229,7 @@ impl<T: Real> GeometryImage<T> {
         };
         let mut best: Option<GeometryImageHit<T>> = None;
         for tri in tris {
-            if let Some(t) = moller_trumbore(tri, ray)
+            if let Some(t) = ray_triangle(tri, ray.origin, ray.dir).map(|h| h.0)
                 && t > t_min
                 && t < best.map_or(t_max, |b| b.t)
             {
@@ -242,28 +242,6 @@ impl<T: Real> GeometryImage<T> {
         }
         best
     }
-}
-
-/// Möller-Trumbore distance (edges included); `None` when parallel, outside or not finite.
-fn moller_trumbore<T: Real>(tri: &[T::Vec3; 3], ray: &Ray<T>) -> Option<T> {
-    let (e1, e2) = (tri[1] - tri[0], tri[2] - tri[0]);
-    let p = ray.dir.cross(e2);
-    let det = e1.dot(p);
-    if !(det != T::ZERO && det.is_finite()) {
-        return None;
-    }
-    let inv = T::ONE / det;
-    let s = ray.origin - tri[0];
-    let b1 = s.dot(p) * inv;
-    if !(b1 >= T::ZERO && b1 <= T::ONE) {
-        return None;
-    }
-    let q = s.cross(e1);
-    let b2 = ray.dir.dot(q) * inv;
-    if !(b2 >= T::ZERO && b1 + b2 <= T::ONE) {
-        return None;
-    }
-    Some(e2.dot(q) * inv)
 }
 
 #[cfg(test)]
@@ -330,7 +308,7 @@ mod tests {
                 for x in 0..16 {
                     let c = image.quad_corners(x, y);
                     for tri in [[c[0], c[1], c[2]], [c[0], c[2], c[3]]] {
-                        if let Some(t) = moller_trumbore(&tri, &ray)
+                        if let Some(t) = ray_triangle(&tri, ray.origin, ray.dir).map(|h| h.0)
                             && t > 0.0
                             && slow.is_none_or(|s| t < s)
                         {

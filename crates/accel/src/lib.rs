@@ -50,7 +50,7 @@ mod shell;
 mod tetra;
 
 pub use affine::AffineHit;
-pub use bvh::{ARITY, Aabb, Bvh4, Node4, SlabRay};
+pub use bvh::{ARITY, Aabb, Bvh4, Node4, SlabRay, ray_triangle};
 pub use displacement::{
     DisplacedSurface, DisplacementError, MAX_TEXEL_COORDINATE, RootNodes, SurfaceHit, TexelPart,
     TraversalStats,

@@ -92,6 +92,23 @@ fn world_to_canonical_bisect<T: Real>(prism: &Prism<T>, p: T::Vec3) -> Option<[T
 }
 
 impl<T: Real> DisplacedSurface<T> {
+    /// Sample steps for a texture-space segment from `a` to `b`: `samples_per_texel` per texel
+    /// crossed along its longer axis, rounded up, at least 1 and at most `max_samples - 1`
+    /// (capped before rounding, so an infinite or NaN span from a degenerate prism becomes the
+    /// cap instead of overflowing).
+    pub(crate) fn sample_steps(&self, a: T::Vec2, b: T::Vec2, opts: &MarchOptions) -> usize {
+        let texels = ((b.x() - a.x()).abs().max((b.y() - a.y()).abs()) / self.texel_size).to_f64();
+        let cap = opts.max_samples.max(2) - 1;
+        let wanted = (texels * opts.samples_per_texel).min(cap as f64);
+        let whole = wanted as usize; // ceil without std:
+        let steps = if (whole as f64) < wanted {
+            whole + 1
+        } else {
+            whole
+        };
+        steps.clamp(1, cap)
+    }
+
     /// The height of the surface at texture point `(u, v)` and which part of which texel
     /// holds it (the microtriangles of [`DisplacedSurface::intersect`]).
     pub(crate) fn surface_height(&self, u: T, v: T) -> (T, [i32; 2], TexelPart) {
@@ -171,19 +188,7 @@ impl<T: Real> DisplacedSurface<T> {
         let start = canonical(span.t_in, span.h_in)?;
         let end = canonical(span.t_out, span.h_out)?;
         let uv = |c: &[T; 3]| prism.texture_uv(c[0], c[1]);
-        let (uv0, uv1) = (uv(&start), uv(&end));
-        let texels =
-            ((uv1.x() - uv0.x()).abs().max((uv1.y() - uv0.y()).abs()) / self.texel_size).to_f64();
-        // ceil without std: samples for the texels crossed, plus the end point; capped first
-        // (an infinite or NaN span, from a degenerate prism, becomes the cap).
-        let wanted = (texels * opts.samples_per_texel).min(opts.max_samples as f64);
-        let whole = wanted as usize;
-        let steps = if (whole as f64) < wanted {
-            whole + 1
-        } else {
-            whole
-        };
-        let count = (steps + 1).clamp(2, opts.max_samples.max(2));
+        let count = self.sample_steps(uv(&start), uv(&end), opts) + 1;
         let cos_limit = T::from_f64(opts.max_angle).cos();
         let inside = |c: &[T; 3]| c[0] >= T::ZERO && c[1] >= T::ZERO && c[0] + c[1] <= T::ONE;
         let below = |c: &[T; 3]| {

@@ -174,18 +174,8 @@ impl<T: Real> ProjectiveSurface<T> {
         let at = |t: T| Self::canonical(prism, g, ray.origin + ray.dir * t);
         let (start, end) = (at(t_in)?, at(t_out)?);
         let uv = |c: &[T; 3]| prism.texture_uv(c[0], c[1]);
-        let (uv0, uv1) = (uv(&start), uv(&end));
-        let texels =
-            ((uv1.x() - uv0.x()).abs().max((uv1.y() - uv0.y()).abs()) / s.texel_size).to_f64();
-        // The sample spacing: `samples_per_texel` per texel crossed (ceil without std).
-        let wanted = (texels * opts.samples_per_texel).min(opts.max_samples as f64);
-        let whole = wanted as usize;
-        let steps = (if (whole as f64) < wanted {
-            whole + 1
-        } else {
-            whole
-        })
-        .max(1);
+        // The sample spacing: `samples_per_texel` per texel crossed.
+        let steps = s.sample_steps(uv(&start), uv(&end), opts);
         let dt = (t_out - t_in) / T::from_i32(steps as i32);
         // Height above the surface (negative: under it) at distance t.
         let above = |t: T| -> Option<(T, [T; 3])> {

@@ -168,18 +168,7 @@ impl<T: Real> DisplacedSurface<T> {
             end[2] = h;
         }
         let uv = |c: &[T; 3]| prism.texture_uv(c[0], c[1]);
-        let (uv0, uv1) = (uv(&start), uv(&end));
-        let texels =
-            ((uv1.x() - uv0.x()).abs().max((uv1.y() - uv0.y()).abs()) / self.texel_size).to_f64();
-        // ceil without std, capped first (as in marching).
-        let wanted = (texels * opts.samples_per_texel).min(opts.max_samples as f64);
-        let whole = wanted as usize;
-        let steps = if (whole as f64) < wanted {
-            whole + 1
-        } else {
-            whole
-        };
-        let count = (steps + 1).clamp(2, opts.max_samples.max(2));
+        let count = self.sample_steps(uv(&start), uv(&end), opts) + 1;
         let below = |c: &[T; 3]| {
             let p = uv(c);
             let (h, texel, part) = self.surface_height(p.x(), p.y());

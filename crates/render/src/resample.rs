@@ -5,11 +5,10 @@
 //! differs from the clipped pre-tessellation.
 
 use crate::scenes::{Content, Scene};
-use crate::trace::{TraceHit, Tracer};
+use crate::trace::{TraceHit, Tracer, ray_in};
 use nlrt_accel::{GeometryImage, HEIGHT_ONE};
 use nlrt_poly::glam::{DVec2, DVec3};
 use nlrt_poly::{Real, Vector3};
-use nlrt_shellmap::Ray;
 
 /// Why a scene has no geometry image.
 pub fn unsupported_reason(scene: &Scene) -> Option<&'static str> {
@@ -109,14 +108,8 @@ impl<T: Real> GeometryImageTracer<T> {
 
 impl<T: Real> Tracer for GeometryImageTracer<T> {
     fn intersect(&self, origin: DVec3, dir: DVec3, t_min: f64, t_max: f64) -> Option<TraceHit> {
-        let v = |a: DVec3| T::Vec3::new(T::from_f64(a.x), T::from_f64(a.y), T::from_f64(a.z));
-        let ray = Ray::new(v(origin), v(dir))?;
-        let t_max = if t_max.is_finite() {
-            T::from_f64(t_max)
-        } else {
-            T::INFINITY
-        };
-        let hit = self.image.intersect(&ray, T::from_f64(t_min), t_max)?;
+        let (ray, t_min, t_max) = ray_in::<T>(origin, dir, t_min, t_max)?;
+        let hit = self.image.intersect(&ray, t_min, t_max)?;
         let n = hit.normal;
         let n = DVec3::new(n.x().to_f64(), n.y().to_f64(), n.z().to_f64()).normalize_or_zero();
         if n == DVec3::ZERO {

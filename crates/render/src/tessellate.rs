@@ -6,7 +6,7 @@
 //! microtriangles); the report states their distance.
 
 use crate::scenes::{Content, Scene};
-use nlrt_accel::{Aabb, Bvh4, HEIGHT_ONE, SlabRay};
+use nlrt_accel::{Aabb, Bvh4, HEIGHT_ONE, SlabRay, ray_triangle};
 use nlrt_poly::glam::{DVec2, DVec3};
 use rayon::prelude::*;
 
@@ -176,7 +176,7 @@ impl Tessellated {
         let mut best = None;
         self.bvh.traverse(&slab, t_min, t_max, |i, t_max| {
             let tri = &self.triangles[i as usize];
-            let t = moller_trumbore(tri, origin, dir)?;
+            let t = ray_triangle(tri, origin, dir).map(|h| h.0)?;
             if t > t_min && t < t_max {
                 best = Some(i);
                 Some(t)
@@ -186,7 +186,7 @@ impl Tessellated {
         });
         let i = best?;
         let tri = &self.triangles[i as usize];
-        let t = moller_trumbore(tri, origin, dir)?;
+        let t = ray_triangle(tri, origin, dir).map(|h| h.0)?;
         let n = (tri[1] - tri[0]).cross(tri[2] - tri[0]).normalize_or_zero();
         Some((
             t,
@@ -194,26 +194,4 @@ impl Tessellated {
             self.base[i as usize],
         ))
     }
-}
-
-/// Möller-Trumbore ray-triangle distance (edges included); `None` when parallel or outside.
-fn moller_trumbore(tri: &[DVec3; 3], o: DVec3, d: DVec3) -> Option<f64> {
-    let (e1, e2) = (tri[1] - tri[0], tri[2] - tri[0]);
-    let p = d.cross(e2);
-    let det = e1.dot(p);
-    if det == 0.0 || !det.is_finite() {
-        return None;
-    }
-    let inv = 1.0 / det;
-    let s = o - tri[0];
-    let u = s.dot(p) * inv;
-    if !(0.0..=1.0).contains(&u) {
-        return None;
-    }
-    let q = s.cross(e1);
-    let v = d.dot(q) * inv;
-    if !(v >= 0.0 && u + v <= 1.0) {
-        return None;
-    }
-    Some(e2.dot(q) * inv)
 }

@@ -201,6 +201,28 @@ pub struct TraceHit {
     pub id: u32,
 }
 
+/// A renderer ray (f64) in precision `T` with its distance range (an infinite `t_max` stays
+/// infinite); `None` for a zero or non-finite direction.
+pub(crate) fn ray_in<T: Real>(
+    origin: DVec3,
+    dir: DVec3,
+    t_min: f64,
+    t_max: f64,
+) -> Option<(Ray<T>, T, T)> {
+    let v = |a: DVec3| T::Vec3::new(T::from_f64(a.x), T::from_f64(a.y), T::from_f64(a.z));
+    let t_max = if t_max.is_finite() {
+        T::from_f64(t_max)
+    } else {
+        T::INFINITY
+    };
+    Some((Ray::new(v(origin), v(dir))?, T::from_f64(t_min), t_max))
+}
+
+/// A vector of precision `T` in f64.
+pub(crate) fn to_dvec3<T: Real>(v: T::Vec3) -> DVec3 {
+    DVec3::new(v.x().to_f64(), v.y().to_f64(), v.z().to_f64())
+}
+
 /// Intersection of a ray with the scene.
 pub trait Tracer: Sync {
     /// Nearest hit with distance in `(t_min, t_max]`.
@@ -251,15 +273,8 @@ impl<T: Real> Nonlinear<T> {
 
 impl<T: Real> Tracer for Nonlinear<T> {
     fn intersect(&self, origin: DVec3, dir: DVec3, t_min: f64, t_max: f64) -> Option<TraceHit> {
-        let v = |a: DVec3| T::Vec3::new(T::from_f64(a.x), T::from_f64(a.y), T::from_f64(a.z));
-        let ray = Ray::new(v(origin), v(dir))?;
+        let (ray, t_min, t_max) = ray_in::<T>(origin, dir, t_min, t_max)?;
         let mut stats = TraversalStats::default();
-        let t_max = if t_max.is_finite() {
-            T::from_f64(t_max)
-        } else {
-            T::INFINITY
-        };
-        let t_min = T::from_f64(t_min);
         let (t, n, id) = match self {
             Self::Displaced(s) => {
                 let hit = s.intersect(&ray, t_min, t_max, &mut stats)?;
@@ -272,7 +287,7 @@ impl<T: Real> Tracer for Nonlinear<T> {
         };
         Some(TraceHit {
             t: t.to_f64(),
-            normal: DVec3::new(n.x().to_f64(), n.y().to_f64(), n.z().to_f64()),
+            normal: to_dvec3::<T>(n),
             id,
         })
     }
@@ -302,21 +317,13 @@ impl<T: Real> TessellationFree<T> {
 
 impl<T: Real> Tracer for TessellationFree<T> {
     fn intersect(&self, origin: DVec3, dir: DVec3, t_min: f64, t_max: f64) -> Option<TraceHit> {
-        let v = |a: DVec3| T::Vec3::new(T::from_f64(a.x), T::from_f64(a.y), T::from_f64(a.z));
-        let ray = Ray::new(v(origin), v(dir))?;
-        let t_max = if t_max.is_finite() {
-            T::from_f64(t_max)
-        } else {
-            T::INFINITY
-        };
+        let (ray, t_min, t_max) = ray_in::<T>(origin, dir, t_min, t_max)?;
         let mut stats = TraversalStats::default();
-        let hit = self
-            .0
-            .intersect_affine(&ray, T::from_f64(t_min), t_max, &mut stats)?;
+        let hit = self.0.intersect_affine(&ray, t_min, t_max, &mut stats)?;
         let n = DisplacedSurface::affine_normal(&hit, ray.dir)?;
         Some(TraceHit {
             t: hit.t.to_f64(),
-            normal: DVec3::new(n.x().to_f64(), n.y().to_f64(), n.z().to_f64()),
+            normal: to_dvec3::<T>(n),
             id: hit.triangle,
         })
     }
@@ -361,15 +368,8 @@ impl<T: Real> Marching<T> {
 
 impl<T: Real> Tracer for Marching<T> {
     fn intersect(&self, origin: DVec3, dir: DVec3, t_min: f64, t_max: f64) -> Option<TraceHit> {
-        let v = |a: DVec3| T::Vec3::new(T::from_f64(a.x), T::from_f64(a.y), T::from_f64(a.z));
-        let ray = Ray::new(v(origin), v(dir))?;
-        let t_max = if t_max.is_finite() {
-            T::from_f64(t_max)
-        } else {
-            T::INFINITY
-        };
+        let (ray, t_min, t_max) = ray_in::<T>(origin, dir, t_min, t_max)?;
         let mut stats = TraversalStats::default();
-        let t_min = T::from_f64(t_min);
         let hit = if self.tetrahedra {
             self.surface
                 .intersect_tetrahedra(&ray, t_min, t_max, &self.opts, &mut stats)?
@@ -380,7 +380,7 @@ impl<T: Real> Tracer for Marching<T> {
         let n = self.surface.normal(&hit, ray.dir)?;
         Some(TraceHit {
             t: hit.hit.t.to_f64(),
-            normal: DVec3::new(n.x().to_f64(), n.y().to_f64(), n.z().to_f64()),
+            normal: to_dvec3::<T>(n),
             id: hit.triangle,
         })
     }
@@ -420,31 +420,20 @@ impl<T: Real> Projective<T> {
 
 impl<T: Real> Tracer for Projective<T> {
     fn intersect(&self, origin: DVec3, dir: DVec3, t_min: f64, t_max: f64) -> Option<TraceHit> {
-        let v = |a: DVec3| T::Vec3::new(T::from_f64(a.x), T::from_f64(a.y), T::from_f64(a.z));
-        let ray = Ray::new(v(origin), v(dir))?;
-        let t_max = if t_max.is_finite() {
-            T::from_f64(t_max)
-        } else {
-            T::INFINITY
-        };
+        let (ray, t_min, t_max) = ray_in::<T>(origin, dir, t_min, t_max)?;
         let mut hash = Rng(origin.x.to_bits()
             ^ dir.x.to_bits().rotate_left(21)
             ^ dir.y.to_bits().rotate_left(42)
             ^ dir.z.to_bits());
         let jitter = T::from_f64(hash.next());
         let mut stats = TraversalStats::default();
-        let hit = self.surface.intersect(
-            &ray,
-            T::from_f64(t_min),
-            t_max,
-            jitter,
-            &self.opts,
-            &mut stats,
-        )?;
+        let hit = self
+            .surface
+            .intersect(&ray, t_min, t_max, jitter, &self.opts, &mut stats)?;
         let n = self.surface.surface().normal(&hit, ray.dir)?;
         Some(TraceHit {
             t: hit.hit.t.to_f64(),
-            normal: DVec3::new(n.x().to_f64(), n.y().to_f64(), n.z().to_f64()),
+            normal: to_dvec3::<T>(n),
             id: hit.triangle,
         })
     }
