@@ -109,6 +109,32 @@ impl<T: Real> DisplacedSurface<T> {
         steps.clamp(1, cap)
     }
 
+    /// The hit of a sampling method at canonical point `c` (alpha, beta, h) at distance `t`,
+    /// with the texel and part that hold it.
+    pub(crate) fn sampled_hit(
+        &self,
+        tri: usize,
+        prism: &Prism<T>,
+        c: [T; 3],
+        t: T,
+    ) -> SurfaceHit<T> {
+        let uv = prism.texture_uv(c[0], c[1]);
+        let (_, texel, part) = self.surface_height(uv.x(), uv.y());
+        SurfaceHit {
+            hit: Hit {
+                t,
+                alpha: c[0],
+                beta: c[1],
+                h: c[2],
+                u: uv.x(),
+                v: uv.y(),
+            },
+            triangle: tri as u32,
+            texel,
+            part,
+        }
+    }
+
     /// The height of the surface at texture point `(u, v)` and which part of which texel
     /// holds it (the microtriangles of [`DisplacedSurface::intersect`]).
     pub(crate) fn surface_height(&self, u: T, v: T) -> (T, [i32; 2], TexelPart) {
@@ -240,23 +266,9 @@ impl<T: Real> DisplacedSurface<T> {
                         lo = mid;
                     }
                 }
-                let (_, texel, part) = below(&hi);
                 let p = prism.shell_point(hi[0], hi[1], hi[2]);
                 let t = (p - ray.origin).dot(ray.dir);
-                let hit_uv = uv(&hi);
-                return Some(SurfaceHit {
-                    hit: Hit {
-                        t,
-                        alpha: hi[0],
-                        beta: hi[1],
-                        h: hi[2],
-                        u: hit_uv.x(),
-                        v: hit_uv.y(),
-                    },
-                    triangle: tri as u32,
-                    texel,
-                    part,
-                });
+                return Some(self.sampled_hit(tri, prism, hi, t));
             }
             previous = sample;
             current = sample;

@@ -17,7 +17,7 @@
 
 use alloc::vec::Vec;
 use nlrt_poly::{Real, Vector2, Vector3};
-use nlrt_shellmap::{Hit, Prism, Ray, intersect_prism};
+use nlrt_shellmap::{Prism, Ray, intersect_prism};
 
 use crate::displacement::{DisplacedSurface, DisplacementError, SurfaceHit, TraversalStats};
 use crate::heightfield::HeightField;
@@ -203,21 +203,7 @@ impl<T: Real> ProjectiveSurface<T> {
                     _ => t,
                 };
                 let c = at(t_hit).unwrap_or(c);
-                let p = uv(&c);
-                let (_, texel, part) = s.surface_height(p.x(), p.y());
-                return Some(SurfaceHit {
-                    hit: Hit {
-                        t: t_hit,
-                        alpha: c[0],
-                        beta: c[1],
-                        h: c[2],
-                        u: p.x(),
-                        v: p.y(),
-                    },
-                    triangle: tri as u32,
-                    texel,
-                    part,
-                });
+                return Some(s.sampled_hit(tri, prism, c, t_hit));
             }
             previous = Some((t, f));
             if t >= t_out || k as usize > steps + 1 {

@@ -9,7 +9,7 @@
 //! report measures how far that is from the others.
 
 use nlrt_poly::{Real, Vector2, Vector3};
-use nlrt_shellmap::{Hit, Prism, Ray};
+use nlrt_shellmap::{Prism, Ray};
 
 use crate::displacement::{DisplacedSurface, SurfaceHit, TraversalStats};
 use crate::march::MarchOptions;
@@ -194,23 +194,8 @@ impl<T: Real> DisplacedSurface<T> {
                     lo = mid;
                 }
             }
-            let c = at(hi);
-            let (_, texel, part) = below(&c);
             let t = t_in + (t_out - t_in) * hi;
-            let hit_uv = uv(&c);
-            return Some(SurfaceHit {
-                hit: Hit {
-                    t,
-                    alpha: c[0],
-                    beta: c[1],
-                    h: c[2],
-                    u: hit_uv.x(),
-                    v: hit_uv.y(),
-                },
-                triangle: tri as u32,
-                texel,
-                part,
-            });
+            return Some(self.sampled_hit(tri, prism, at(hi), t));
         }
         None
     }
