@@ -264,3 +264,58 @@ mod tests {
         }
     }
 }
+
+#[cfg(test)]
+mod degenerate {
+    use super::*;
+    use crate::{BaseMesh, HeightField, Wrap};
+    use alloc::vec;
+    use nlrt_poly::glam::{DVec2, DVec3};
+
+    /// A base triangle of zero world area (a line) has flat tetrahedra and flat prisms: the
+    /// sampling methods report no hit and do not panic, for rays across it from any side;
+    /// a uv-degenerate one (a line in uv) is still a volume and is hit.
+    #[test]
+    fn world_degenerate_triangles_are_not_hit_uv_degenerate_ones_are() {
+        let field = HeightField::from_unit_heights(4, &[0.5; 16], Wrap::Clamp).unwrap();
+        let line = BaseMesh::<f64>::new(
+            vec![DVec3::ZERO, DVec3::X, DVec3::new(2.0, 0.0, 0.0)],
+            vec![DVec3::Z; 3],
+            vec![DVec2::ZERO, DVec2::X, DVec2::Y],
+            vec![[0, 1, 2]],
+        )
+        .unwrap();
+        let flat = DisplacedSurface::new(line, field.clone(), 1.0, 1.0).unwrap();
+        let uv_line = BaseMesh::<f64>::new(
+            vec![DVec3::ZERO, DVec3::X, DVec3::Y],
+            vec![DVec3::Z; 3],
+            vec![DVec2::ZERO, DVec2::splat(0.5), DVec2::ONE],
+            vec![[0, 1, 2]],
+        )
+        .unwrap();
+        let degenerate_uv = DisplacedSurface::new(uv_line, field, 1.0, 1.0).unwrap();
+        let opts = MarchOptions::default();
+        let mut st = TraversalStats::default();
+        for dir in [
+            DVec3::new(0.0, 0.0, -1.0),
+            DVec3::new(0.0, 1.0, -1.0),
+            DVec3::new(0.0, 1.0, 0.0),
+        ] {
+            // Aimed at a point of the sheet the line's shell would be (x = 0.5, y = 0, z = 0.25).
+            let ray = Ray::new(DVec3::new(0.5, 0.0, 0.25) - dir, dir).unwrap();
+            assert!(
+                flat.intersect_tetrahedra(&ray, 0.0, f64::INFINITY, &opts, &mut st)
+                    .is_none()
+            );
+            assert!(
+                flat.intersect_marching(&ray, 0.0, f64::INFINITY, &opts, &mut st)
+                    .is_none()
+            );
+        }
+        let down = Ray::new(DVec3::new(0.2, 0.2, 2.0), DVec3::new(0.0, 0.0, -1.0)).unwrap();
+        let hit = degenerate_uv
+            .intersect_tetrahedra(&down, 0.0, f64::INFINITY, &opts, &mut st)
+            .expect("a uv-degenerate prism still has volume");
+        assert!((hit.hit.t - 1.5).abs() < 1e-3, "{hit:?}");
+    }
+}
