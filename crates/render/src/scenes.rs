@@ -422,27 +422,40 @@ pub fn scale_object() -> Vec<[DVec3; 3]> {
     })
 }
 
-/// (e) Scales: a torus of 2,048 base triangles with a scale object tiled 16 x 16.
-#[must_use]
-pub fn scales() -> Scene {
-    let (positions, normals, uvs, triangles) = torus(32, 1.0, 0.4);
+/// A shell-mapped torus of `n x n` quads (`2 n^2` base triangles) seen from above at an
+/// angle: the base of the scales, feathers and high-poly scenes.
+fn shell_torus(
+    name: &'static str,
+    n: usize,
+    object: Vec<[DVec3; 3]>,
+    height_scale: f64,
+    tiling: f64,
+    material: Material,
+) -> Scene {
+    let (positions, normals, uvs, triangles) = torus(n, 1.0, 0.4);
     Scene {
-        name: "scales",
+        name,
         positions,
         normals,
         uvs,
         triangles,
-        content: Content::Shell(scale_object()),
-        height_scale: 0.06,
-        tiling: 16.0,
+        content: Content::Shell(object),
+        height_scale,
+        tiling,
         camera: Camera {
             eye: DVec3::new(0.0, 1.8, 2.2),
             target: DVec3::new(0.0, -0.1, 0.0),
             fov_degrees: 45.0,
         },
         sun: DVec3::new(0.3, 0.8, 0.5).normalize(),
-        material: Material::GLOSSY,
+        material,
     }
+}
+
+/// (e) Scales: a torus of 2,048 base triangles with a glossy scale object tiled 16 x 16.
+#[must_use]
+pub fn scales() -> Scene {
+    shell_torus("scales", 32, scale_object(), 0.06, 16.0, Material::GLOSSY)
 }
 
 /// A Cornell-box-like object in the unit tile: floor, back, left and right walls and two
@@ -710,27 +723,18 @@ pub fn feather_object(barbs: usize) -> Vec<[DVec3; 3]> {
 /// 64 x 128 (tiling 64, the torus's v running over two units of uv).
 #[must_use]
 pub fn feathers() -> Scene {
-    let (positions, normals, mut uvs, triangles) = torus(32, 1.0, 0.4);
-    for uv in &mut uvs {
+    let mut scene = shell_torus(
+        "feathers",
+        32,
+        feather_object(12),
+        0.08,
+        64.0,
+        Material::Diffuse,
+    );
+    for uv in &mut scene.uvs {
         uv.y *= 2.0;
     }
-    Scene {
-        name: "feathers",
-        positions,
-        normals,
-        uvs,
-        triangles,
-        content: Content::Shell(feather_object(12)),
-        height_scale: 0.08,
-        tiling: 64.0,
-        camera: Camera {
-            eye: DVec3::new(0.0, 1.8, 2.2),
-            target: DVec3::new(0.0, -0.1, 0.0),
-            fov_degrees: 45.0,
-        },
-        sun: DVec3::new(0.3, 0.8, 0.5).normalize(),
-        material: Material::Diffuse,
-    }
+    scene
 }
 
 /// A closed, bumpy blob in the unit tile: a sphere of `n x n` quads (`2 n^2` triangles:
@@ -754,22 +758,12 @@ pub fn blob_object(n: usize) -> Vec<[DVec3; 3]> {
 /// (`2 n^2` triangles per instance, minus the zero-area ones at the poles).
 #[must_use]
 pub fn highpoly(n: usize) -> Scene {
-    let (positions, normals, uvs, triangles) = torus(16, 1.0, 0.4);
-    Scene {
-        name: "highpoly",
-        positions,
-        normals,
-        uvs,
-        triangles,
-        content: Content::Shell(blob_object(n)),
-        height_scale: 0.12,
-        tiling: 16.0,
-        camera: Camera {
-            eye: DVec3::new(0.0, 1.8, 2.2),
-            target: DVec3::new(0.0, -0.1, 0.0),
-            fov_degrees: 45.0,
-        },
-        sun: DVec3::new(0.3, 0.8, 0.5).normalize(),
-        material: Material::Diffuse,
-    }
+    shell_torus(
+        "highpoly",
+        16,
+        blob_object(n),
+        0.12,
+        16.0,
+        Material::Diffuse,
+    )
 }
