@@ -297,19 +297,12 @@ impl<T: Real> DisplacedSurface<T> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{BaseMesh, HeightField, Wrap};
-    use alloc::vec;
+    use crate::{HeightField, Wrap};
     use alloc::vec::Vec;
     use nlrt_poly::glam::{DVec2, DVec3};
 
     fn plane(heights: &[f32], side: usize) -> DisplacedSurface<f64> {
-        let mesh = BaseMesh::<f64>::new(
-            vec![DVec3::ZERO, DVec3::X, DVec3::new(1.0, 1.0, 0.0), DVec3::Y],
-            vec![DVec3::Z; 4],
-            vec![DVec2::ZERO, DVec2::X, DVec2::ONE, DVec2::Y],
-            vec![[0, 1, 2], [0, 2, 3]],
-        )
-        .unwrap();
+        let mesh = crate::test_util::unit_square(DVec3::Z, [[0, 1, 2], [0, 2, 3]]);
         let field = HeightField::from_unit_heights(side, heights, Wrap::Clamp).unwrap();
         DisplacedSurface::new(mesh, field, 1.0, 1.0).unwrap()
     }
@@ -400,13 +393,7 @@ mod tests {
 
     #[test]
     fn uv_degenerate_triangles_are_never_hit() {
-        let mesh = BaseMesh::<f64>::new(
-            vec![DVec3::ZERO, DVec3::X, DVec3::Y],
-            vec![DVec3::Z; 3],
-            vec![DVec2::ZERO, DVec2::splat(0.5), DVec2::ONE],
-            vec![[0, 1, 2]],
-        )
-        .unwrap();
+        let mesh = crate::test_util::uv_line_triangle();
         let field = HeightField::from_unit_heights(4, &[0.5; 16], Wrap::Clamp).unwrap();
         let surface = DisplacedSurface::new(mesh, field, 1.0, 1.0).unwrap();
         let ray = Ray::new(DVec3::new(0.2, 0.2, 2.0), DVec3::new(0.0, 0.0, -1.0)).unwrap();

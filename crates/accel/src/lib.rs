@@ -47,6 +47,8 @@ mod march;
 mod mesh;
 mod projective;
 mod shell;
+#[cfg(test)]
+mod test_util;
 mod tetra;
 
 pub use affine::AffineHit;

@@ -280,18 +280,11 @@ impl<T: Real> DisplacedSurface<T> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{BaseMesh, HeightField, Wrap};
-    use alloc::vec;
+    use crate::{HeightField, Wrap};
     use nlrt_poly::glam::{DVec2, DVec3};
 
-    fn plane(height: f32, normals: [DVec3; 4]) -> DisplacedSurface<f64> {
-        let mesh = BaseMesh::<f64>::new(
-            vec![DVec3::ZERO, DVec3::X, DVec3::new(1.0, 1.0, 0.0), DVec3::Y],
-            normals.to_vec(),
-            vec![DVec2::ZERO, DVec2::X, DVec2::ONE, DVec2::Y],
-            vec![[0, 1, 2], [0, 2, 3]],
-        )
-        .unwrap();
+    fn plane(height: f32) -> DisplacedSurface<f64> {
+        let mesh = crate::test_util::unit_square(DVec3::Z, [[0, 1, 2], [0, 2, 3]]);
         let field = HeightField::from_unit_heights(16, &[height; 256], Wrap::Clamp).unwrap();
         DisplacedSurface::new(mesh, field, 1.0, 1.0).unwrap()
     }
@@ -321,7 +314,7 @@ mod tests {
     fn a_flat_map_on_a_constant_normal_prism_is_hit_exactly_enough() {
         // Constant normals: the mapping is linear, the surface a plane at the stored height;
         // the hit is found to the binary search's resolution (2^-10 of a sample step).
-        let surface = plane(0.4, [DVec3::Z; 4]);
+        let surface = plane(0.4);
         let stored = f64::from(surface.field().sample(0, 0)) / f64::from(crate::HEIGHT_ONE);
         let opts = MarchOptions::default();
         for i in 0..100 {
@@ -343,13 +336,7 @@ mod tests {
 
     #[test]
     fn uv_degenerate_triangles_are_marched_too() {
-        let mesh = BaseMesh::<f64>::new(
-            vec![DVec3::ZERO, DVec3::X, DVec3::Y],
-            vec![DVec3::Z; 3],
-            vec![DVec2::ZERO, DVec2::splat(0.5), DVec2::ONE],
-            vec![[0, 1, 2]],
-        )
-        .unwrap();
+        let mesh = crate::test_util::uv_line_triangle();
         let field = HeightField::from_unit_heights(4, &[0.5; 16], Wrap::Clamp).unwrap();
         let surface = DisplacedSurface::new(mesh, field, 1.0, 1.0).unwrap();
         let ray = Ray::new(DVec3::new(0.2, 0.2, 2.0), DVec3::new(0.0, 0.0, -1.0)).unwrap();
@@ -373,10 +360,9 @@ mod tests {
 #[cfg(test)]
 mod agreement {
     use super::*;
-    use crate::{BaseMesh, HeightField, Wrap};
-    use alloc::vec;
+    use crate::{HeightField, Wrap};
     use alloc::vec::Vec;
-    use nlrt_poly::glam::{DVec2, DVec3};
+    use nlrt_poly::glam::DVec3;
 
     /// On a smooth map (features much wider than a sample step) over affine prisms (a plane
     /// with constant normals, the triangles' normals pointing down and up), marching finds
@@ -394,13 +380,7 @@ mod agreement {
                 0.5 + 0.3 * (6.0 * i).sin() * (5.0 * j).cos()
             })
             .collect();
-        let mesh = BaseMesh::<f64>::new(
-            vec![DVec3::ZERO, DVec3::X, DVec3::new(1.0, 1.0, 0.0), DVec3::Y],
-            vec![DVec3::Z; 4],
-            vec![DVec2::ZERO, DVec2::X, DVec2::ONE, DVec2::Y],
-            vec![[0, 2, 1], [0, 3, 2]],
-        )
-        .unwrap();
+        let mesh = crate::test_util::unit_square(DVec3::Z, [[0, 2, 1], [0, 3, 2]]);
         let field = HeightField::from_unit_heights(side, &heights, Wrap::Clamp).unwrap();
         let surface = DisplacedSurface::new(mesh, field, 0.3, 1.0).unwrap();
         let mut bad = 0;

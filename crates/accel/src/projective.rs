@@ -223,13 +223,7 @@ mod tests {
 
     #[test]
     fn constant_normals_give_the_same_surface_as_nonlinear_tracing() {
-        let mesh = BaseMesh::<f64>::new(
-            vec![DVec3::ZERO, DVec3::X, DVec3::new(1.0, 1.0, 0.0), DVec3::Y],
-            vec![DVec3::Z * 0.3; 4],
-            vec![DVec2::ZERO, DVec2::X, DVec2::ONE, DVec2::Y],
-            vec![[0, 1, 2], [0, 2, 3]],
-        )
-        .unwrap();
+        let mesh = crate::test_util::unit_square(DVec3::Z * 0.3, [[0, 1, 2], [0, 2, 3]]);
         let side = 32;
         let heights: Vec<f32> = (0..side * side)
             .map(|k| {

@@ -204,9 +204,9 @@ impl<T: Real> DisplacedSurface<T> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{BaseMesh, HeightField, Wrap};
+    use crate::{HeightField, Wrap};
     use alloc::vec;
-    use nlrt_poly::glam::{DVec2, DVec3};
+    use nlrt_poly::glam::DVec3;
 
     #[test]
     fn neighbours_split_their_shared_side_alike() {
@@ -236,13 +236,7 @@ mod tests {
 
     #[test]
     fn constant_normal_prisms_are_linear_so_a_flat_map_is_exact() {
-        let mesh = BaseMesh::<f64>::new(
-            vec![DVec3::ZERO, DVec3::X, DVec3::new(1.0, 1.0, 0.0), DVec3::Y],
-            vec![DVec3::Z; 4],
-            vec![DVec2::ZERO, DVec2::X, DVec2::ONE, DVec2::Y],
-            vec![[0, 1, 2], [0, 2, 3]],
-        )
-        .unwrap();
+        let mesh = crate::test_util::unit_square(DVec3::Z, [[0, 1, 2], [0, 2, 3]]);
         let field = HeightField::from_unit_heights(16, &[0.4; 256], Wrap::Clamp).unwrap();
         let surface = DisplacedSurface::new(mesh, field, 1.0, 1.0).unwrap();
         let stored = f64::from(surface.field().sample(0, 0)) / f64::from(crate::HEIGHT_ONE);
@@ -286,13 +280,7 @@ mod degenerate {
         )
         .unwrap();
         let flat = DisplacedSurface::new(line, field.clone(), 1.0, 1.0).unwrap();
-        let uv_line = BaseMesh::<f64>::new(
-            vec![DVec3::ZERO, DVec3::X, DVec3::Y],
-            vec![DVec3::Z; 3],
-            vec![DVec2::ZERO, DVec2::splat(0.5), DVec2::ONE],
-            vec![[0, 1, 2]],
-        )
-        .unwrap();
+        let uv_line = crate::test_util::uv_line_triangle();
         let degenerate_uv = DisplacedSurface::new(uv_line, field, 1.0, 1.0).unwrap();
         let opts = MarchOptions::default();
         let mut st = TraversalStats::default();
