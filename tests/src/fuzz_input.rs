@@ -284,6 +284,12 @@ pub fn fuzz_displacement<T: Real>(data: &[u8]) {
     if let Some(h) = surface.intersect_marching(&ray, T::ZERO, T::INFINITY, &opts, &mut stats) {
         assert!(h.hit.t.is_finite() && h.hit.t > T::ZERO, "marching {h:?}");
     }
+    if let Some(h) =
+        surface.intersect_curved_marching(&ray, T::ZERO, T::INFINITY, &opts, &mut stats)
+    {
+        assert!(h.hit.t.is_finite() && h.hit.t > T::ZERO, "curved {h:?}");
+        let _ = surface.curved_normal(&h, ray.dir);
+    }
 }
 
 /// The shell traversal target: up to four object triangles in the unit tile (raw values;

@@ -191,7 +191,7 @@ impl<T: Real> DisplacedSurface<T> {
     }
 
     /// The texture-space microtriangles (or flat texel) of texel `(x, y)`.
-    fn texel_geometry(&self, x: i32, y: i32) -> ([T; 4], [T; 4]) {
+    pub(crate) fn texel_geometry(&self, x: i32, y: i32) -> ([T; 4], [T; 4]) {
         let c = self.field.texel_corners(i64::from(x), i64::from(y));
         let h = c.map(Self::height);
         let uv = [

@@ -184,9 +184,72 @@ impl<T: Real> DisplacedSurface<T> {
             .traverse(ray, t_min, t_max, |tri, prism, t_max| {
                 stats.prism_tests += 1;
                 let span = intersect_prism(prism, ray, t_min, t_max)?;
-                let hit = self.march_prism(tri, prism, ray, &span, opts, stats)?;
+                let hit = self.march_prism(tri, prism, ray, &span, opts, false, stats)?;
                 (hit.hit.t > t_min && hit.hit.t < t_max).then_some((hit, hit.hit.t))
             })
+    }
+
+    /// The nearest hit of `ray` with `t` in `(t_min, t_max)` by curved shell mapping
+    /// (Jeschke et al. 2007, sec. 3.2 and 4.5): marched like
+    /// [`DisplacedSurface::intersect_marching`], each sample's texture height by the paper's
+    /// Eq. 2 ([`Prism::curved_texture_height`]) between the Coons-patch surfaces of heights 0
+    /// and 1. The surface is `Phi_c(u, v, height(u, v))`, a different one from the smooth
+    /// shell's: its parts that bend out of the prism (curvature beyond the height compression
+    /// `w / 2 + 1 / 4`) are not found, as in the paper. The hit's `h` is the texture height;
+    /// [`DisplacedSurface::curved_normal`] gives its normal.
+    pub fn intersect_curved_marching(
+        &self,
+        ray: &Ray<T>,
+        t_min: T,
+        t_max: T,
+        opts: &MarchOptions,
+        stats: &mut TraversalStats,
+    ) -> Option<SurfaceHit<T>> {
+        self.prisms
+            .traverse(ray, t_min, t_max, |tri, prism, t_max| {
+                stats.prism_tests += 1;
+                let span = intersect_prism(prism, ray, t_min, t_max)?;
+                let hit = self.march_prism(tri, prism, ray, &span, opts, true, stats)?;
+                (hit.hit.t > t_min && hit.hit.t < t_max).then_some((hit, hit.hit.t))
+            })
+    }
+
+    /// The world-space unit normal at a hit of [`DisplacedSurface::intersect_curved_marching`],
+    /// facing against `dir`: that of the curved images of the hit microtriangle's corners
+    /// (the flat triangle the pre-tessellated curved reference holds). On a uv-degenerate
+    /// base triangle (no inverse of Eq. 2-3 for the corners) the normal of the shell's triangle
+    /// at the hit's height instead. `None` where the shell degenerates.
+    #[must_use]
+    pub fn curved_normal(&self, hit: &SurfaceHit<T>, dir: T::Vec3) -> Option<T::Vec3> {
+        let prism = self.prism(hit.triangle as usize);
+        let (t0, e0, e1) = (
+            prism.uv[0],
+            prism.uv[1] - prism.uv[0],
+            prism.uv[2] - prism.uv[0],
+        );
+        let det = e0.x() * e1.y() - e0.y() * e1.x();
+        if !(det != T::ZERO && det.is_finite()) {
+            let layer = [0, 1, 2].map(|i| prism.vertex(i, hit.hit.h * T::HALF + T::HALF * T::HALF));
+            let n = (layer[1] - layer[0]).cross(layer[2] - layer[0]);
+            return crate::cells::facing_unit::<T>(n, dir);
+        }
+        let world = |u: T, v: T, h: T| {
+            let (du, dv) = (u - t0.x(), v - t0.y());
+            let alpha = (du * e1.y() - dv * e1.x()) / det;
+            let beta = (e0.x() * dv - e0.y() * du) / det;
+            prism.curved_shell_point(alpha, beta, h)
+        };
+        let ([u0, v0, u1, v1], [h00, h10, h01, h11]) =
+            self.texel_geometry(hit.texel[0], hit.texel[1]);
+        // The half of the texel that holds the hit (a flat texel reports no half).
+        let (a, b) = ((hit.hit.u - u0) / (u1 - u0), (hit.hit.v - v0) / (v1 - v0));
+        let corners = if a >= b {
+            [world(u0, v0, h00), world(u1, v0, h10), world(u1, v1, h11)]
+        } else {
+            [world(u0, v0, h00), world(u1, v1, h11), world(u0, v1, h01)]
+        };
+        let n = (corners[1] - corners[0]).cross(corners[2] - corners[0]);
+        crate::cells::facing_unit::<T>(n, dir)
     }
 
     #[allow(clippy::too_many_arguments)]
@@ -197,6 +260,7 @@ impl<T: Real> DisplacedSurface<T> {
         ray: &Ray<T>,
         span: &PrismSpan<T>,
         opts: &MarchOptions,
+        curved: bool,
         stats: &mut TraversalStats,
     ) -> Option<SurfaceHit<T>> {
         let world = |t: T| ray.origin + ray.dir * t;
@@ -217,10 +281,19 @@ impl<T: Real> DisplacedSurface<T> {
         let count = self.sample_steps(uv(&start), uv(&end), opts) + 1;
         let cos_limit = T::from_f64(opts.max_angle).cos();
         let inside = |c: &[T; 3]| c[0] >= T::ZERO && c[1] >= T::ZERO && c[0] + c[1] <= T::ONE;
+        // The sample's texture height: the smooth shell's height itself, or by Eq. 2 between
+        // the curved shell's bounding surfaces.
+        let texture_height = |c: &[T; 3]| {
+            if curved {
+                prism.curved_texture_height(c[0], c[1], c[2])
+            } else {
+                c[2]
+            }
+        };
         let below = |c: &[T; 3]| {
             let p = uv(c);
             let (h, texel, part) = self.surface_height(p.x(), p.y());
-            (c[2] <= h, texel, part)
+            (texture_height(c) <= h, texel, part)
         };
         let lerp = |a: &[T; 3], b: &[T; 3], s: T| {
             [
@@ -268,7 +341,7 @@ impl<T: Real> DisplacedSurface<T> {
                 }
                 let p = prism.shell_point(hi[0], hi[1], hi[2]);
                 let t = (p - ray.origin).dot(ray.dir);
-                return Some(self.sampled_hit(tri, prism, hi, t));
+                return Some(self.sampled_hit(tri, prism, [hi[0], hi[1], texture_height(&hi)], t));
             }
             previous = sample;
             current = sample;
@@ -331,6 +404,27 @@ mod tests {
                 .unwrap_or_else(|| panic!("ray {i} misses the plane"));
             let p = ray.origin + ray.dir * hit.hit.t;
             assert!((p.z - stored).abs() < 1e-3, "{p:?}");
+        }
+    }
+
+    #[test]
+    fn curved_marching_of_a_flat_prism_finds_the_compressed_height() {
+        // Flat base, equal normals: the Coons patches are flat, only w' = w / 2 + 1 / 4 stays.
+        let surface = plane(0.4);
+        let stored = f64::from(surface.field().sample(0, 0)) / f64::from(crate::HEIGHT_ONE);
+        let opts = MarchOptions::default();
+        for i in 0..50 {
+            let (x, y) = (0.1 + 0.015 * i as f64, 0.8 - 0.012 * i as f64);
+            let ray = Ray::new(DVec3::new(x, y, 2.0), DVec3::new(0.05, -0.1, -1.0)).unwrap();
+            let mut stats = TraversalStats::default();
+            let hit = surface
+                .intersect_curved_marching(&ray, 0.0, f64::INFINITY, &opts, &mut stats)
+                .unwrap_or_else(|| panic!("ray {i} misses the plane"));
+            let p = ray.origin + ray.dir * hit.hit.t;
+            assert!((p.z - (stored / 2.0 + 0.25)).abs() < 1e-3, "{p:?}");
+            assert!((hit.hit.h - stored).abs() < 2e-3, "{}", hit.hit.h);
+            let n = surface.curved_normal(&hit, ray.dir).unwrap();
+            assert!((n - DVec3::Z).length() < 1e-12, "{n}");
         }
     }
 

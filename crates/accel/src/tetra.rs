@@ -299,11 +299,23 @@ mod degenerate {
                 flat.intersect_marching(&ray, 0.0, f64::INFINITY, &opts, &mut st)
                     .is_none()
             );
+            assert!(
+                flat.intersect_curved_marching(&ray, 0.0, f64::INFINITY, &opts, &mut st)
+                    .is_none()
+            );
         }
         let down = Ray::new(DVec3::new(0.2, 0.2, 2.0), DVec3::new(0.0, 0.0, -1.0)).unwrap();
         let hit = degenerate_uv
             .intersect_tetrahedra(&down, 0.0, f64::INFINITY, &opts, &mut st)
             .expect("a uv-degenerate prism still has volume");
         assert!((hit.hit.t - 1.5).abs() < 1e-3, "{hit:?}");
+        // Curved: flat base, equal normals, so the surface is at 0.5 / 2 + 1 / 4; the normal
+        // is the shell triangle's (no uv inverse for the microtriangle's corners).
+        let hit = degenerate_uv
+            .intersect_curved_marching(&down, 0.0, f64::INFINITY, &opts, &mut st)
+            .expect("a uv-degenerate prism still has volume");
+        assert!((hit.hit.t - 1.5).abs() < 1e-3, "{hit:?}");
+        let n = degenerate_uv.curved_normal(&hit, down.dir).unwrap();
+        assert!((n - DVec3::Z).length() < 1e-12, "{n}");
     }
 }

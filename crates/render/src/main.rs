@@ -43,8 +43,12 @@ enum MethodKind {
     Tetrahedra,
     /// Projective displacement mapping (parallel offset prisms); height fields only.
     Projective,
+    /// Curved shell mapping (Jeschke et al. 2007, Coons patches); height fields only.
+    Curved,
     /// The pre-tessellated reference (f64).
     Tessellated,
+    /// The curved shell's surface pre-tessellated (f64): the curved shell's reference.
+    TessellatedCurved,
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
@@ -152,11 +156,11 @@ enum Command {
         scenes: Vec<String>,
         #[command(flatten)]
         args: RenderArgs,
-        /// Leave out the pre-tessellated reference (its build dominates at paper sizes).
+        /// Leave out the pre-tessellated references (their build dominates at paper sizes).
         #[arg(long)]
         no_reference: bool,
-        /// Only these methods (comma-separated: nonlinear-f32, nonlinear-f64,
-        /// tessellation-free-f32, tessellation-free-f64, tessellated-f64; default: all).
+        /// Only these methods (comma-separated slugs, e.g. nonlinear-f32, marching-f64,
+        /// curved-f32, tessellated-f64; an unknown one lists them all; default: all).
         #[arg(long, value_delimiter = ',', value_parser = parse_method)]
         methods: Vec<Method>,
     },
@@ -383,7 +387,10 @@ fn main() -> ExitCode {
                 (MethodKind::Tetrahedra, Precision::F64) => Method::TetrahedraF64,
                 (MethodKind::Projective, Precision::F32) => Method::ProjectiveF32,
                 (MethodKind::Projective, Precision::F64) => Method::ProjectiveF64,
+                (MethodKind::Curved, Precision::F32) => Method::CurvedF32,
+                (MethodKind::Curved, Precision::F64) => Method::CurvedF64,
                 (MethodKind::Tessellated, _) => Method::Tessellated,
+                (MethodKind::TessellatedCurved, _) => Method::TessellatedCurved,
             };
             if let Some(why) = method.unsupported_reason(&built) {
                 return fail("render", format!("{method} cannot render {scene}: {why}"));
@@ -437,7 +444,7 @@ fn main() -> ExitCode {
             let methods = Method::ALL
                 .into_iter()
                 .filter(|m| methods.is_empty() || methods.contains(m))
-                .filter(|&m| !(no_reference && m == Method::Tessellated))
+                .filter(|&m| !(no_reference && m.is_reference()))
                 .collect();
             let opts = ReportOptions {
                 scenes,
@@ -543,8 +550,10 @@ fn main() -> ExitCode {
                     }
                     Some(
                         MethodKind::Tessellated
+                        | MethodKind::TessellatedCurved
                         | MethodKind::GeometryImage
-                        | MethodKind::Projective,
+                        | MethodKind::Projective
+                        | MethodKind::Curved,
                     ) => false,
                     None => true,
                 };

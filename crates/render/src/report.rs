@@ -206,7 +206,10 @@ fn speed_against_error_svg(points: &[(Method, String, f64, ErrorStats)]) -> Stri
         Method::TetrahedraF64 => "#c49c94",
         Method::ProjectiveF32 => "#e377c2",
         Method::ProjectiveF64 => "#f7b6d2",
+        Method::CurvedF32 => "#17becf",
+        Method::CurvedF64 => "#9edae5",
         Method::Tessellated => "#2ca02c",
+        Method::TessellatedCurved => "#bcbd22",
     };
     let series = |metric: &dyn Fn(&ErrorStats) -> f64| -> Vec<Series> {
         Method::ALL
@@ -257,7 +260,8 @@ pub fn run(opts: &ReportOptions) -> Result<String, String> {
         "## Scenes\n\n{}x{} pixels, {} spp, {} bounce(s) with a shadow ray per hit; {} threads; target features: {}. \
          Scene size: {:?}. Error columns compare primary-ray depths with the f64 pre-tessellated reference \
          (a different surface by design: flat world triangles through mapped vertices) and with nonlinear f64 \
-         (the precision error alone).\n",
+         (the precision error alone); the curved shell's with its own surface pre-tessellated and with \
+         curved shell f64.\n",
         r.width,
         r.height,
         r.spp,
@@ -268,7 +272,7 @@ pub fn run(opts: &ReportOptions) -> Result<String, String> {
     );
     let _ = writeln!(
         md,
-        "| scene | method | init s | accel MiB | Mrays/s primary | Mrays/s all | {}miss/hit mismatch vs ref | depth err vs ref median / p99 | mismatch vs nl f64 | depth err vs nl f64 p99 / max |",
+        "| scene | method | init s | accel MiB | Mrays/s primary | Mrays/s all | {}miss/hit mismatch vs ref | depth err vs ref median / p99 | mismatch vs f64 | depth err vs f64 p99 / max |",
         if opts.scaling {
             format!("speed-up {} threads / 1 | ", rayon::current_num_threads())
         } else {
@@ -299,11 +303,11 @@ pub fn run(opts: &ReportOptions) -> Result<String, String> {
             name.clone(),
             runs.iter().map(|m| m.method).collect::<Vec<_>>(),
         ));
-        let reference = runs.iter().find(|m| m.method == Method::Tessellated);
-        let nl64 = runs.iter().find(|m| m.method == Method::NonlinearF64);
+        let run_of = |method: Method| runs.iter().find(|r| r.method == method);
         for m in &runs {
+            let reference = run_of(m.method.reference());
             let vs = |other: Option<&MethodRun>| other.map(|o| compare(&m.frame, &o.frame));
-            let (e_ref, e_64) = (vs(reference), vs(nl64));
+            let (e_ref, e_64) = (vs(reference), vs(run_of(m.method.f64_partner())));
             if let Some(e) = e_ref {
                 points.push((m.method, name.clone(), m.all_mrays(), e));
             }
@@ -339,7 +343,7 @@ pub fn run(opts: &ReportOptions) -> Result<String, String> {
                 let path = dir.join(format!("{name}-{}.png", m.method.slug()));
                 write_png(&path, m.frame.width, m.frame.height, &m.frame.rgb8())
                     .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
-                if let Some(reference) = reference.filter(|_| m.method != Method::Tessellated) {
+                if let Some(reference) = reference.filter(|_| !m.method.is_reference()) {
                     let path = dir.join(format!("{name}-{}-diff.png", m.method.slug()));
                     write_png(
                         &path,
@@ -376,7 +380,7 @@ pub fn run(opts: &ReportOptions) -> Result<String, String> {
             let _ = writeln!(md, "{name}: {}\n", cells.join(" "));
             let diffs: Vec<String> = methods
                 .iter()
-                .filter(|&&m| m != Method::Tessellated)
+                .filter(|&&m| !m.is_reference() && methods.contains(&m.reference()))
                 .map(|m| {
                     format!(
                         "![{name} {m} minus reference]({name}-{}-diff.png)",
@@ -384,7 +388,7 @@ pub fn run(opts: &ReportOptions) -> Result<String, String> {
                     )
                 })
                 .collect();
-            if methods.contains(&Method::Tessellated) {
+            if !diffs.is_empty() {
                 let _ = writeln!(
                     md,
                     "{name} differences from the reference (x4; magenta: hit/miss mismatch): {}\n",

@@ -8,6 +8,7 @@
 use crate::scenes::{Content, Scene};
 use nlrt_accel::{Aabb, Bvh4, HEIGHT_ONE, SlabRay, ray_triangle};
 use nlrt_poly::glam::{DVec2, DVec3};
+use nlrt_shellmap::Prism;
 use rayon::prelude::*;
 
 /// World-space triangles of the tessellated displaced surface with their BVH.
@@ -45,6 +46,18 @@ impl Tessellated {
     /// Tessellates `scene` (in parallel over texel rows).
     #[must_use]
     pub fn new(scene: &Scene) -> Self {
+        Self::build(scene, false)
+    }
+
+    /// Tessellates `scene` through the curved shell mapping (Jeschke et al. 2007, sec. 3.2:
+    /// [`Prism::curved_shell_point`] at the microtriangles' vertices): the reference of curved
+    /// shell mapping, whole (also where it bends out of the prisms).
+    #[must_use]
+    pub fn curved(scene: &Scene) -> Self {
+        Self::build(scene, true)
+    }
+
+    fn build(scene: &Scene, curved: bool) -> Self {
         // Cells: texels of the height map, or tiles of the object (in uv units times tiling).
         let cells_per_tile = match &scene.content {
             Content::Displacement(field) => field.side() as f64,
@@ -93,6 +106,10 @@ impl Tessellated {
                     let d = DVec2::new(q[0], q[1]) - t[0];
                     let alpha = d.perp_dot(t[2] - t[0]) / det;
                     let beta = (t[1] - t[0]).perp_dot(d) / det;
+                    if curved {
+                        return Prism::<f64>::new(p, n, [DVec2::ZERO; 3])
+                            .curved_shell_point(alpha, beta, q[2]);
+                    }
                     let h = q[2];
                     let at = |k: usize| p[k] + n[k] * h;
                     at(0) + (at(1) - at(0)) * alpha + (at(2) - at(0)) * beta

@@ -53,13 +53,23 @@ pub enum Method {
     ProjectiveF32,
     /// Projective displacement mapping in double precision.
     ProjectiveF64,
+    /// Curved shell mapping (Jeschke et al. 2007, sec. 3.2 and 4.5: Coons patches over the
+    /// vertex normals, height compression `w / 2 + 1 / 4`, heights by the interpolation of
+    /// its Eq. 2, marched like [`Method::MarchingF32`]) in single precision; height fields
+    /// only. A different surface: compared with [`Method::TessellatedCurved`].
+    CurvedF32,
+    /// Curved shell mapping in double precision.
+    CurvedF64,
     /// Pre-tessellated microtriangles in a world-space BVH (f64): the reference.
     Tessellated,
+    /// The curved shell mapping's surface pre-tessellated (microtriangle vertices through the
+    /// curved mapping, f64): the reference of [`Method::CurvedF32`] and [`Method::CurvedF64`].
+    TessellatedCurved,
 }
 
 impl Method {
-    /// All methods, reference last.
-    pub const ALL: [Method; 13] = [
+    /// All methods, references last.
+    pub const ALL: [Method; 16] = [
         Method::NonlinearF32,
         Method::NonlinearF64,
         Method::AffineF32,
@@ -72,7 +82,10 @@ impl Method {
         Method::TetrahedraF64,
         Method::ProjectiveF32,
         Method::ProjectiveF64,
+        Method::CurvedF32,
+        Method::CurvedF64,
         Method::Tessellated,
+        Method::TessellatedCurved,
     ];
 
     /// Short name.
@@ -91,7 +104,10 @@ impl Method {
             Method::TetrahedraF64 => "tetrahedra f64",
             Method::ProjectiveF32 => "projective f32",
             Method::ProjectiveF64 => "projective f64",
+            Method::CurvedF32 => "curved shell f32",
+            Method::CurvedF64 => "curved shell f64",
             Method::Tessellated => "pre-tessellated f64",
+            Method::TessellatedCurved => "pre-tessellated curved f64",
         }
     }
 
@@ -111,7 +127,37 @@ impl Method {
             Method::TetrahedraF64 => "tetrahedra-f64",
             Method::ProjectiveF32 => "projective-f32",
             Method::ProjectiveF64 => "projective-f64",
+            Method::CurvedF32 => "curved-f32",
+            Method::CurvedF64 => "curved-f64",
             Method::Tessellated => "tessellated-f64",
+            Method::TessellatedCurved => "tessellated-curved-f64",
+        }
+    }
+
+    /// The reference its error is measured against: the pre-tessellated surface it renders.
+    #[must_use]
+    pub fn reference(self) -> Method {
+        match self {
+            Method::CurvedF32 | Method::CurvedF64 | Method::TessellatedCurved => {
+                Method::TessellatedCurved
+            }
+            _ => Method::Tessellated,
+        }
+    }
+
+    /// Whether this is a pre-tessellated reference.
+    #[must_use]
+    pub fn is_reference(self) -> bool {
+        matches!(self, Method::Tessellated | Method::TessellatedCurved)
+    }
+
+    /// The f64 run of the same surface, whose difference is this method's precision error
+    /// alone (nonlinear f64; curved shell f64 for the curved methods).
+    #[must_use]
+    pub fn f64_partner(self) -> Method {
+        match self {
+            Method::CurvedF32 | Method::CurvedF64 | Method::TessellatedCurved => Method::CurvedF64,
+            _ => Method::NonlinearF64,
         }
     }
 
@@ -156,6 +202,11 @@ impl Method {
                     "tetrahedral shells are implemented for height fields, not instanced objects",
                 )
             }
+            Method::CurvedF32 | Method::CurvedF64 | Method::TessellatedCurved => {
+                (!matches!(scene.content, Content::Displacement(_))).then_some(
+                    "curved shell mapping is implemented for height fields, not instanced objects",
+                )
+            }
             Method::NonlinearF32 | Method::NonlinearF64 | Method::Tessellated => None,
         }
     }
@@ -179,7 +230,10 @@ impl Method {
             Method::TetrahedraF64 => Box::new(Marching::<f64>::tetrahedra(scene)?),
             Method::ProjectiveF32 => Box::new(Projective::<f32>::new(scene)?),
             Method::ProjectiveF64 => Box::new(Projective::<f64>::new(scene)?),
+            Method::CurvedF32 => Box::new(Marching::<f32>::curved(scene)?),
+            Method::CurvedF64 => Box::new(Marching::<f64>::curved(scene)?),
             Method::Tessellated => Box::new(Tessellated::new(scene)),
+            Method::TessellatedCurved => Box::new(Tessellated::curved(scene)),
         })
     }
 }
@@ -339,7 +393,18 @@ impl<T: Real> Tracer for TessellationFree<T> {
 pub struct Marching<T: Real> {
     surface: DisplacedSurface<T>,
     opts: MarchOptions,
-    tetrahedra: bool,
+    shell: SampledShell,
+}
+
+/// The shell a [`Marching`] tracer samples.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum SampledShell {
+    /// Smooth shell mapping (Jeschke et al. 2007, sec. 3.1).
+    Smooth,
+    /// Three tetrahedra per prism (piecewise-linear map).
+    Tetrahedra,
+    /// Curved shell mapping (Jeschke et al. 2007, sec. 3.2).
+    Curved,
 }
 
 impl<T: Real> Marching<T> {
@@ -350,7 +415,7 @@ impl<T: Real> Marching<T> {
             Nonlinear::Displaced(surface) => Some(Self {
                 surface,
                 opts: MarchOptions::default(),
-                tetrahedra: false,
+                shell: SampledShell::Smooth,
             }),
             Nonlinear::Shell(_) => None,
         }
@@ -360,7 +425,16 @@ impl<T: Real> Marching<T> {
     #[must_use]
     pub fn tetrahedra(scene: &Scene) -> Option<Self> {
         Self::new(scene).map(|m| Self {
-            tetrahedra: true,
+            shell: SampledShell::Tetrahedra,
+            ..m
+        })
+    }
+
+    /// Curved shell mapping; `None` for scenes that are not height fields.
+    #[must_use]
+    pub fn curved(scene: &Scene) -> Option<Self> {
+        Self::new(scene).map(|m| Self {
+            shell: SampledShell::Curved,
             ..m
         })
     }
@@ -370,14 +444,20 @@ impl<T: Real> Tracer for Marching<T> {
     fn intersect(&self, origin: DVec3, dir: DVec3, t_min: f64, t_max: f64) -> Option<TraceHit> {
         let (ray, t_min, t_max) = ray_in::<T>(origin, dir, t_min, t_max)?;
         let mut stats = TraversalStats::default();
-        let hit = if self.tetrahedra {
-            self.surface
-                .intersect_tetrahedra(&ray, t_min, t_max, &self.opts, &mut stats)?
-        } else {
-            self.surface
-                .intersect_marching(&ray, t_min, t_max, &self.opts, &mut stats)?
+        let (s, opts) = (&self.surface, &self.opts);
+        let hit = match self.shell {
+            SampledShell::Smooth => s.intersect_marching(&ray, t_min, t_max, opts, &mut stats)?,
+            SampledShell::Tetrahedra => {
+                s.intersect_tetrahedra(&ray, t_min, t_max, opts, &mut stats)?
+            }
+            SampledShell::Curved => {
+                s.intersect_curved_marching(&ray, t_min, t_max, opts, &mut stats)?
+            }
         };
-        let n = self.surface.normal(&hit, ray.dir)?;
+        let n = match self.shell {
+            SampledShell::Curved => s.curved_normal(&hit, ray.dir)?,
+            _ => s.normal(&hit, ray.dir)?,
+        };
         Some(TraceHit {
             t: hit.hit.t.to_f64(),
             normal: to_dvec3::<T>(n),

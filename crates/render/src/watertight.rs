@@ -303,14 +303,18 @@ pub fn measure(scene: &Scene, rays_side: usize, method: Method) -> Result<LeakRe
         Method::TetrahedraF32 => measure_in::<f32>(scene, rays_side, method),
         Method::TetrahedraF64 => measure_in::<f64>(scene, rays_side, method),
         Method::Tessellated
+        | Method::TessellatedCurved
         | Method::GeometryImageF32
         | Method::GeometryImageF64
         | Method::ProjectiveF32
-        | Method::ProjectiveF64 => Err(format!(
+        | Method::ProjectiveF64
+        | Method::CurvedF32
+        | Method::CurvedF64 => Err(format!(
             "{method}: watertightness is measured for nonlinear and tessellation-free tracing \
-             (the reference and geometry images are other surfaces: flat triangles through \
-             re-sampled points, which need not lie above the base near its edges; projective \
-             mapping displaces over other prisms)"
+             and the smooth and tetrahedral shells (the references and geometry images are \
+             other surfaces: flat triangles through re-sampled points, which need not lie above \
+             the base near its edges; projective mapping displaces over other prisms; the \
+             curved shell bends out of the prisms where they are thin for their curvature)"
         )),
     }
 }

@@ -30,12 +30,14 @@
 compile_error!("nlrt-shellmap needs the `std` or the `libm` feature");
 
 mod aabb;
+mod curved;
 mod microtriangle;
 mod prism;
 mod prism_hit;
 mod ray;
 
 pub use aabb::{BoxSpan, intersect_box};
+pub use curved::coons_displacement;
 pub use microtriangle::{
     Hit, TexturePlane, alpha_beta_eq11, inside_triangle, intersect_flat_microtriangle,
     intersect_flat_texel, intersect_microtriangle, world_normal,
