@@ -41,6 +41,7 @@ mod affine;
 mod bvh;
 mod cells;
 mod displacement;
+mod distance_map;
 mod geometry_image;
 mod heightfield;
 mod march;
@@ -57,6 +58,7 @@ pub use displacement::{
     DisplacedSurface, DisplacementError, MAX_TEXEL_COORDINATE, RootNodes, SurfaceHit, TexelPart,
     TraversalStats,
 };
+pub use distance_map::DistanceMap;
 pub use geometry_image::{GeometryImage, GeometryImageError, GeometryImageHit};
 pub use heightfield::{HEIGHT_ONE, HeightField, HeightMapError, Wrap};
 pub use march::MarchOptions;

@@ -16,6 +16,7 @@
 use nlrt_poly::{Real, Vector2, Vector3};
 use nlrt_shellmap::{Hit, Prism, PrismSpan, Ray, intersect_prism};
 
+use crate::DistanceMap;
 use crate::displacement::{DisplacedSurface, SurfaceHit, TexelPart, TraversalStats};
 
 /// Settings of [`DisplacedSurface::intersect_marching`].
@@ -89,6 +90,17 @@ fn world_to_canonical_bisect<T: Real>(prism: &Prism<T>, p: T::Vec3) -> Option<[T
     let w = (lo + hi) * T::HALF;
     let (alpha, beta) = barycentric_at(prism, p, w)?;
     Some([alpha, beta, w])
+}
+
+/// What [`DisplacedSurface::march_prism`] samples.
+#[derive(Clone, Copy, Debug)]
+enum Marched<'a> {
+    /// The smooth shell, fixed steps.
+    Smooth,
+    /// The smooth shell, steps lengthened by a distance map.
+    DistanceMap(&'a DistanceMap),
+    /// The curved shell (Coons patches), fixed steps.
+    Curved,
 }
 
 impl<T: Real> DisplacedSurface<T> {
@@ -184,7 +196,7 @@ impl<T: Real> DisplacedSurface<T> {
             .traverse(ray, t_min, t_max, |tri, prism, t_max| {
                 stats.prism_tests += 1;
                 let span = intersect_prism(prism, ray, t_min, t_max)?;
-                let hit = self.march_prism(tri, prism, ray, &span, opts, false, stats)?;
+                let hit = self.march_prism(tri, prism, ray, &span, opts, Marched::Smooth, stats)?;
                 (hit.hit.t > t_min && hit.hit.t < t_max).then_some((hit, hit.hit.t))
             })
     }
@@ -209,7 +221,35 @@ impl<T: Real> DisplacedSurface<T> {
             .traverse(ray, t_min, t_max, |tri, prism, t_max| {
                 stats.prism_tests += 1;
                 let span = intersect_prism(prism, ray, t_min, t_max)?;
-                let hit = self.march_prism(tri, prism, ray, &span, opts, true, stats)?;
+                let hit = self.march_prism(tri, prism, ray, &span, opts, Marched::Curved, stats)?;
+                (hit.hit.t > t_min && hit.hit.t < t_max).then_some((hit, hit.hit.t))
+            })
+    }
+
+    /// The nearest hit of `ray` with `t` in `(t_min, t_max)` by smooth shell mapping with ray
+    /// marching accelerated by the 3D distance map `map` of this surface's height field (sec.
+    /// 4.4): where the sample's cell has an empty radius longer than the fixed step, the
+    /// march jumps that far along its texture-space path; the last step before a hit is
+    /// always a fixed one, so the hits are those of
+    /// [`DisplacedSurface::intersect_marching`] except where the correction of sec. 4.3 moved
+    /// a sample off the path (as in the paper, the jumps are safe on the path, not off it),
+    /// and where a feature is thinner than a step: the jumps shift the sampling phase, so
+    /// either marcher may catch a thin tip the other steps over.
+    pub fn intersect_sphere_traced(
+        &self,
+        ray: &Ray<T>,
+        t_min: T,
+        t_max: T,
+        map: &DistanceMap,
+        opts: &MarchOptions,
+        stats: &mut TraversalStats,
+    ) -> Option<SurfaceHit<T>> {
+        let shell = Marched::DistanceMap(map);
+        self.prisms
+            .traverse(ray, t_min, t_max, |tri, prism, t_max| {
+                stats.prism_tests += 1;
+                let span = intersect_prism(prism, ray, t_min, t_max)?;
+                let hit = self.march_prism(tri, prism, ray, &span, opts, shell, stats)?;
                 (hit.hit.t > t_min && hit.hit.t < t_max).then_some((hit, hit.hit.t))
             })
     }
@@ -260,7 +300,7 @@ impl<T: Real> DisplacedSurface<T> {
         ray: &Ray<T>,
         span: &PrismSpan<T>,
         opts: &MarchOptions,
-        curved: bool,
+        shell: Marched<'_>,
         stats: &mut TraversalStats,
     ) -> Option<SurfaceHit<T>> {
         let world = |t: T| ray.origin + ray.dir * t;
@@ -284,7 +324,7 @@ impl<T: Real> DisplacedSurface<T> {
         // The sample's texture height: the smooth shell's height itself, or by Eq. 2 between
         // the curved shell's bounding surfaces.
         let texture_height = |c: &[T; 3]| {
-            if curved {
+            if matches!(shell, Marched::Curved) {
                 prism.curved_texture_height(c[0], c[1], c[2])
             } else {
                 c[2]
@@ -304,11 +344,41 @@ impl<T: Real> DisplacedSurface<T> {
         };
         let mut previous = start;
         let mut current = start;
-        for k in 1..=count {
+        // Fixed steps left to the exit (fractional after distance-map jumps).
+        let mut remaining = T::from_i32(count as i32);
+        for _ in 0..opts.max_samples.max(2) {
+            if !(remaining > T::ZERO) {
+                break;
+            }
             stats.texel_tests += 1;
-            // Linear step from the last (possibly corrected) sample towards the exit.
-            let remaining = T::from_i32((count - k + 1) as i32);
-            let mut sample = lerp(&current, &end, T::ONE / remaining);
+            // Linear step from the last (possibly corrected) sample towards the exit: one
+            // fixed step, or the empty radius of the distance map where that is longer (its
+            // cells: `cell_texels` texels in u and v, 1 / layers in height).
+            let mut fraction = T::ONE / remaining;
+            let mut jumped = false;
+            if let Marched::DistanceMap(map) = shell {
+                let (a, b) = (uv(&current), uv(&end));
+                let r = map.radius_at(a.x() / self.texel_size, a.y() / self.texel_size, current[2]);
+                if r > 0 {
+                    let cell = self.texel_size * T::from_i32(map.cell_texels() as i32);
+                    let extent = ((b.x() - a.x()).abs() / cell)
+                        .max((b.y() - a.y()).abs() / cell)
+                        .max((end[2] - current[2]).abs() * T::from_i32(map.layers() as i32));
+                    let jump = T::from_i32(i32::from(r)) / extent;
+                    if jump > fraction {
+                        (fraction, jumped) = (jump, true);
+                    }
+                }
+            }
+            let fraction = fraction.min(T::ONE);
+            remaining = if fraction == T::ONE {
+                T::ZERO
+            } else if jumped {
+                remaining * (T::ONE - fraction)
+            } else {
+                remaining - T::ONE
+            };
+            let mut sample = lerp(&current, &end, fraction);
             // Sec. 4.3: correct the sample onto the ray when its direction strays too far.
             let q = prism.shell_point(sample[0], sample[1], sample[2]);
             let to_q = q - ray.origin;
@@ -499,5 +569,59 @@ mod agreement {
             }
         }
         assert_eq!(bad, 0);
+    }
+
+    /// The distance map's jumps skip only empty space: on a smooth map the hits are the
+    /// fixed-step marcher's crossings (bracketed by other samples, so equal to the binary search's resolution:
+    /// 2^-10 of a half-texel step, ~1e-5 here; 1e-4 is still far below a texel, 0.016), with
+    /// fewer samples; over a wrapped, tiled map too.
+    #[test]
+    fn distance_map_jumps_find_the_fixed_step_hits_with_fewer_samples() {
+        let side = 64;
+        let heights: Vec<f32> = (0..side * side)
+            .map(|k| {
+                let (i, j) = ((k % side) as f32, (k / side) as f32);
+                // Periodic and smooth (features wider than a step: no sampling-phase misses).
+                let bump = (-((i - 20.0).powi(2) + (j - 40.0).powi(2)) / 30.0).exp();
+                let tau = core::f32::consts::TAU / side as f32;
+                let waves = (1.0 + (3.0 * tau * i).sin()) * (1.0 + (2.0 * tau * j).cos());
+                0.05 + 0.6 * bump + 0.06 * waves
+            })
+            .collect();
+        for (wrap, tiling) in [(Wrap::Clamp, 1.0), (Wrap::Repeat, 3.0)] {
+            let mesh = crate::test_util::unit_square(DVec3::Z, [[0, 2, 1], [0, 3, 2]]);
+            let field = HeightField::from_unit_heights(side, &heights, wrap).unwrap();
+            let map = crate::DistanceMap::new(&field, 16, 16);
+            let surface = DisplacedSurface::new(mesh, field, 0.3, tiling).unwrap();
+            let opts = MarchOptions::default();
+            let (mut fixed_samples, mut jump_samples, mut hits) = (0, 0, 0);
+            for k in 0..900 {
+                let (x, y) = ((k % 30) as f64 / 30.0, (k / 30) as f64 / 30.0);
+                let o = DVec3::new(x - 0.4, y - 0.3, 0.8);
+                let ray = Ray::new(o, DVec3::new(0.5, 0.4, -0.7)).unwrap();
+                let (mut a_st, mut b_st) = (TraversalStats::default(), TraversalStats::default());
+                let a = surface
+                    .intersect_marching(&ray, 0.0, f64::INFINITY, &opts, &mut a_st)
+                    .map(|h| h.hit.t);
+                let b = surface
+                    .intersect_sphere_traced(&ray, 0.0, f64::INFINITY, &map, &opts, &mut b_st)
+                    .map(|h| h.hit.t);
+                match (a, b) {
+                    (Some(a), Some(b)) => {
+                        hits += 1;
+                        assert!((a - b).abs() < 1e-4, "ray {k}: {a} vs {b}");
+                    }
+                    (None, None) => {}
+                    _ => panic!("ray {k}: {a:?} vs {b:?}"),
+                }
+                fixed_samples += a_st.texel_tests;
+                jump_samples += b_st.texel_tests;
+            }
+            assert!(hits > 300, "{hits}");
+            assert!(
+                2 * jump_samples < fixed_samples,
+                "{wrap:?}: {jump_samples} vs {fixed_samples}"
+            );
+        }
     }
 }

@@ -39,6 +39,8 @@ enum MethodKind {
     GeometryImage,
     /// Smooth shell mapping by ray marching (Jeschke et al. 2007); height fields only.
     Marching,
+    /// Ray marching with Jeschke's 3D distance map (sec. 4.4); height fields only.
+    DistanceMap,
     /// Tetrahedral shells (piecewise-linear mapping); height fields only.
     Tetrahedra,
     /// Projective displacement mapping (parallel offset prisms); height fields only.
@@ -383,6 +385,8 @@ fn main() -> ExitCode {
                 (MethodKind::GeometryImage, Precision::F64) => Method::GeometryImageF64,
                 (MethodKind::Marching, Precision::F32) => Method::MarchingF32,
                 (MethodKind::Marching, Precision::F64) => Method::MarchingF64,
+                (MethodKind::DistanceMap, Precision::F32) => Method::DistanceMapF32,
+                (MethodKind::DistanceMap, Precision::F64) => Method::DistanceMapF64,
                 (MethodKind::Tetrahedra, Precision::F32) => Method::TetrahedraF32,
                 (MethodKind::Tetrahedra, Precision::F64) => Method::TetrahedraF64,
                 (MethodKind::Projective, Precision::F32) => Method::ProjectiveF32,
@@ -544,6 +548,9 @@ fn main() -> ExitCode {
                     }
                     Some(MethodKind::Marching) => {
                         matches!(m, Method::MarchingF32 | Method::MarchingF64)
+                    }
+                    Some(MethodKind::DistanceMap) => {
+                        matches!(m, Method::DistanceMapF32 | Method::DistanceMapF64)
                     }
                     Some(MethodKind::Tetrahedra) => {
                         matches!(m, Method::TetrahedraF32 | Method::TetrahedraF64)

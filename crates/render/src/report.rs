@@ -202,6 +202,8 @@ fn speed_against_error_svg(points: &[(Method, String, f64, ErrorStats)]) -> Stri
         Method::GeometryImageF64 => "#c5b0d5",
         Method::MarchingF32 => "#ff7f0e",
         Method::MarchingF64 => "#ffbb78",
+        Method::DistanceMapF32 => "#7f7f7f",
+        Method::DistanceMapF64 => "#c7c7c7",
         Method::TetrahedraF32 => "#8c564b",
         Method::TetrahedraF64 => "#c49c94",
         Method::ProjectiveF32 => "#e377c2",

@@ -8,7 +8,8 @@ use crate::resample::GeometryImageTracer;
 use crate::scenes::{Content, Scene};
 use crate::tessellate::Tessellated;
 use nlrt_accel::{
-    DisplacedSurface, MarchOptions, ProjectiveSurface, ShellObject, ShellSurface, TraversalStats,
+    DisplacedSurface, DistanceMap, HeightField, MarchOptions, ProjectiveSurface, ShellObject,
+    ShellSurface, TraversalStats,
 };
 use nlrt_poly::glam::DVec3;
 use nlrt_poly::{Real, Vector3};
@@ -41,6 +42,12 @@ pub enum Method {
     MarchingF32,
     /// Smooth shell mapping by ray marching in double precision.
     MarchingF64,
+    /// Ray marching with the 3D distance map of Jeschke et al. 2007, sec. 4.4 (empty-space
+    /// jumps of up to 31 cells; cells of at most 256 per axis and 32 height layers) in single
+    /// precision; height fields only.
+    DistanceMapF32,
+    /// Ray marching with the distance map in double precision.
+    DistanceMapF64,
     /// Tetrahedral shells (Porumbescu et al. 2005: each prism split into three tetrahedra with
     /// consistent diagonals, a piecewise-linear map, sampled like marching) in single
     /// precision; height fields only.
@@ -69,7 +76,7 @@ pub enum Method {
 
 impl Method {
     /// All methods, references last.
-    pub const ALL: [Method; 16] = [
+    pub const ALL: [Method; 18] = [
         Method::NonlinearF32,
         Method::NonlinearF64,
         Method::AffineF32,
@@ -78,6 +85,8 @@ impl Method {
         Method::GeometryImageF64,
         Method::MarchingF32,
         Method::MarchingF64,
+        Method::DistanceMapF32,
+        Method::DistanceMapF64,
         Method::TetrahedraF32,
         Method::TetrahedraF64,
         Method::ProjectiveF32,
@@ -100,6 +109,8 @@ impl Method {
             Method::GeometryImageF64 => "geometry image f64",
             Method::MarchingF32 => "ray marching f32",
             Method::MarchingF64 => "ray marching f64",
+            Method::DistanceMapF32 => "marching + distance map f32",
+            Method::DistanceMapF64 => "marching + distance map f64",
             Method::TetrahedraF32 => "tetrahedra f32",
             Method::TetrahedraF64 => "tetrahedra f64",
             Method::ProjectiveF32 => "projective f32",
@@ -123,6 +134,8 @@ impl Method {
             Method::GeometryImageF64 => "geometry-image-f64",
             Method::MarchingF32 => "marching-f32",
             Method::MarchingF64 => "marching-f64",
+            Method::DistanceMapF32 => "distance-map-f32",
+            Method::DistanceMapF64 => "distance-map-f64",
             Method::TetrahedraF32 => "tetrahedra-f32",
             Method::TetrahedraF64 => "tetrahedra-f64",
             Method::ProjectiveF32 => "projective-f32",
@@ -187,11 +200,13 @@ impl Method {
             Method::GeometryImageF32 | Method::GeometryImageF64 => {
                 crate::resample::unsupported_reason(scene)
             }
-            Method::MarchingF32 | Method::MarchingF64 => {
-                (!matches!(scene.content, Content::Displacement(_))).then_some(
+            Method::MarchingF32
+            | Method::MarchingF64
+            | Method::DistanceMapF32
+            | Method::DistanceMapF64 => (!matches!(scene.content, Content::Displacement(_)))
+                .then_some(
                     "ray marching is implemented for height fields (no distance maps for objects)",
-                )
-            }
+                ),
             Method::ProjectiveF32 | Method::ProjectiveF64 => {
                 (!matches!(scene.content, Content::Displacement(_))).then_some(
                     "projective displacement mapping renders height fields, not instanced objects",
@@ -226,6 +241,8 @@ impl Method {
             Method::GeometryImageF64 => Box::new(GeometryImageTracer::<f64>::new(scene)?),
             Method::MarchingF32 => Box::new(Marching::<f32>::new(scene)?),
             Method::MarchingF64 => Box::new(Marching::<f64>::new(scene)?),
+            Method::DistanceMapF32 => Box::new(Marching::<f32>::distance_map(scene)?),
+            Method::DistanceMapF64 => Box::new(Marching::<f64>::distance_map(scene)?),
             Method::TetrahedraF32 => Box::new(Marching::<f32>::tetrahedra(scene)?),
             Method::TetrahedraF64 => Box::new(Marching::<f64>::tetrahedra(scene)?),
             Method::ProjectiveF32 => Box::new(Projective::<f32>::new(scene)?),
@@ -396,11 +413,20 @@ pub struct Marching<T: Real> {
     shell: SampledShell,
 }
 
+/// The distance map the marchers use: 32 height layers, at most 256 cells per axis (sec. 4.4
+/// used 128^3 for its textures; our maps are wider than tall).
+#[must_use]
+pub fn distance_map_of(field: &HeightField) -> DistanceMap {
+    DistanceMap::new(field, 32, 256)
+}
+
 /// The shell a [`Marching`] tracer samples.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug)]
 enum SampledShell {
     /// Smooth shell mapping (Jeschke et al. 2007, sec. 3.1).
     Smooth,
+    /// Smooth shell mapping with distance-map jumps (sec. 4.4).
+    DistanceMap(DistanceMap),
     /// Three tetrahedra per prism (piecewise-linear map).
     Tetrahedra,
     /// Curved shell mapping (Jeschke et al. 2007, sec. 3.2).
@@ -430,6 +456,20 @@ impl<T: Real> Marching<T> {
         })
     }
 
+    /// Ray marching with the distance map [`distance_map_of`]; `None` for scenes that are not
+    /// height fields.
+    #[must_use]
+    pub fn distance_map(scene: &Scene) -> Option<Self> {
+        let Content::Displacement(field) = &scene.content else {
+            return None;
+        };
+        let map = distance_map_of(field);
+        Self::new(scene).map(|m| Self {
+            shell: SampledShell::DistanceMap(map),
+            ..m
+        })
+    }
+
     /// Curved shell mapping; `None` for scenes that are not height fields.
     #[must_use]
     pub fn curved(scene: &Scene) -> Option<Self> {
@@ -445,8 +485,11 @@ impl<T: Real> Tracer for Marching<T> {
         let (ray, t_min, t_max) = ray_in::<T>(origin, dir, t_min, t_max)?;
         let mut stats = TraversalStats::default();
         let (s, opts) = (&self.surface, &self.opts);
-        let hit = match self.shell {
+        let hit = match &self.shell {
             SampledShell::Smooth => s.intersect_marching(&ray, t_min, t_max, opts, &mut stats)?,
+            SampledShell::DistanceMap(map) => {
+                s.intersect_sphere_traced(&ray, t_min, t_max, map, opts, &mut stats)?
+            }
             SampledShell::Tetrahedra => {
                 s.intersect_tetrahedra(&ray, t_min, t_max, opts, &mut stats)?
             }
@@ -454,7 +497,7 @@ impl<T: Real> Tracer for Marching<T> {
                 s.intersect_curved_marching(&ray, t_min, t_max, opts, &mut stats)?
             }
         };
-        let n = match self.shell {
+        let n = match &self.shell {
             SampledShell::Curved => s.curved_normal(&hit, ray.dir)?,
             _ => s.normal(&hit, ray.dir)?,
         };
@@ -467,6 +510,10 @@ impl<T: Real> Tracer for Marching<T> {
 
     fn memory_bytes(&self) -> usize {
         self.surface.memory_bytes()
+            + match &self.shell {
+                SampledShell::DistanceMap(map) => map.memory_bytes(),
+                _ => 0,
+            }
     }
 }
 

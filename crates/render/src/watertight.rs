@@ -36,13 +36,15 @@ use rayon::prelude::*;
 pub const LEAK_TOLERANCE: f64 = 1e-4;
 
 /// The methods whose leaks are measured, in report order.
-pub const METHODS: [Method; 8] = [
+pub const METHODS: [Method; 10] = [
     Method::NonlinearF32,
     Method::NonlinearF64,
     Method::AffineF32,
     Method::AffineF64,
     Method::MarchingF32,
     Method::MarchingF64,
+    Method::DistanceMapF32,
+    Method::DistanceMapF64,
     Method::TetrahedraF32,
     Method::TetrahedraF64,
 ];
@@ -300,6 +302,8 @@ pub fn measure(scene: &Scene, rays_side: usize, method: Method) -> Result<LeakRe
         Method::AffineF64 => measure_in::<f64>(scene, rays_side, method),
         Method::MarchingF32 => measure_in::<f32>(scene, rays_side, method),
         Method::MarchingF64 => measure_in::<f64>(scene, rays_side, method),
+        Method::DistanceMapF32 => measure_in::<f32>(scene, rays_side, method),
+        Method::DistanceMapF64 => measure_in::<f64>(scene, rays_side, method),
         Method::TetrahedraF32 => measure_in::<f32>(scene, rays_side, method),
         Method::TetrahedraF64 => measure_in::<f64>(scene, rays_side, method),
         Method::Tessellated
@@ -338,6 +342,8 @@ fn measure_in<T: Real>(
     let Nonlinear::Displaced(surface) = &tracer else {
         unreachable!("displacement scene")
     };
+    let map = matches!(method, Method::DistanceMapF32 | Method::DistanceMapF64)
+        .then(|| crate::trace::distance_map_of(surface.field()));
     let criteria = criteria(scene);
     // Base and top-cap triangles exactly as the tracer's prisms have them.
     let mesh = surface.mesh();
@@ -421,6 +427,17 @@ fn measure_in<T: Real>(
                         &mut stats,
                     )
                     .map(|h| (h.hit.t, h.triangle, h.texel, h.part, h.hit.h))
+            } else if let Some(map) = &map {
+                surface
+                    .intersect_sphere_traced(
+                        &ray,
+                        T::ZERO,
+                        T::INFINITY,
+                        map,
+                        &MarchOptions::default(),
+                        &mut stats,
+                    )
+                    .map(|h| (h.hit.t, h.triangle, h.texel, h.part, h.hit.h))
             } else if marching {
                 surface
                     .intersect_marching(&ray, T::ZERO, T::INFINITY, &MarchOptions::default(), &mut stats)
@@ -456,7 +473,7 @@ fn measure_in<T: Real>(
         .iter()
         .filter(|v| matches!(v, Verdict::Leak(_)))
         .count();
-    let nonlinear = !(affine || marching || tetrahedra);
+    let nonlinear = !(affine || marching || tetrahedra || map.is_some());
     let distance_error = nonlinear.then(|| distance_error(scene, surface, n));
     Ok(LeakReport {
         method,

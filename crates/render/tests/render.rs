@@ -337,7 +337,13 @@ fn methods_refuse_scenes_they_cannot_represent() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{err}");
     assert!(err.contains("overlap"), "{err}");
-    for method in ["tessellation-free", "marching", "geometry-image"] {
+    for method in [
+        "tessellation-free",
+        "marching",
+        "distance-map",
+        "curved",
+        "geometry-image",
+    ] {
         let out = nlrt(&["render", "scales", "--method", method]);
         let err = String::from_utf8_lossy(&out.stderr);
         assert_eq!(out.status.code(), Some(2), "{err}");
