@@ -115,15 +115,23 @@ impl<T: Real> Prism<T> {
     /// ```
     #[must_use]
     pub fn curved_shell_height(&self, alpha: T, beta: T, w: T) -> T {
-        let compressed = w * T::HALF + T::HALF * T::HALF;
-        let v = [0, 1, 2].map(|i| self.vertex(i, compressed));
+        self.curved_shell_heights(alpha, beta, [w])[0]
+    }
+
+    /// [`Prism::curved_shell_height`] at several texture heights, sharing the unit normals.
+    fn curved_shell_heights<const K: usize>(&self, alpha: T, beta: T, w: [T; K]) -> [T; K] {
         let m = self.n.map(unit_or_zero::<T>);
         let n = self.n[0] + (self.n[1] - self.n[0]) * alpha + (self.n[2] - self.n[0]) * beta;
         let len = n.length();
-        if !(len > T::ZERO && len.is_finite()) {
-            return compressed;
-        }
-        compressed + coons_displacement::<T>(&v, &m, alpha, beta) / len
+        let bends = len > T::ZERO && len.is_finite();
+        w.map(|w| {
+            let compressed = w * T::HALF + T::HALF * T::HALF;
+            if !bends {
+                return compressed;
+            }
+            let v = [0, 1, 2].map(|i| self.vertex(i, compressed));
+            compressed + coons_displacement::<T>(&v, &m, alpha, beta) / len
+        })
     }
 
     /// `Phi_c(alpha, beta, w)`: the world point of the curved shell at texture height `w`.
@@ -140,8 +148,7 @@ impl<T: Real> Prism<T> {
     /// NaN where the two bounding surfaces meet (a zero-thickness shell).
     #[must_use]
     pub fn curved_texture_height(&self, alpha: T, beta: T, h: T) -> T {
-        let low = self.curved_shell_height(alpha, beta, T::ZERO);
-        let high = self.curved_shell_height(alpha, beta, T::ONE);
+        let [low, high] = self.curved_shell_heights(alpha, beta, [T::ZERO, T::ONE]);
         let thickness = high - low;
         if !(thickness != T::ZERO) {
             return T::NAN;
