@@ -290,6 +290,19 @@ pub fn fuzz_displacement<T: Real>(data: &[u8]) {
         assert!(h.hit.t.is_finite() && h.hit.t > T::ZERO, "curved {h:?}");
         let _ = surface.curved_normal(&h, ray.dir);
     }
+    let cone = nlrt_accel::ConeTracing::new(
+        &surface,
+        nlrt_accel::ConeOptions {
+            max_steps: 256,
+            ..nlrt_accel::ConeOptions::default()
+        },
+    );
+    if let Some(h) = surface.intersect_cone_traced(&ray, T::ZERO, T::INFINITY, &cone, &mut stats) {
+        assert!(
+            h.hit.t.is_finite() && h.hit.t > T::ZERO,
+            "cone tracing {h:?}"
+        );
+    }
 }
 
 /// The shell traversal target: up to four object triangles in the unit tile (raw values;

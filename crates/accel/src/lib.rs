@@ -40,6 +40,7 @@ extern crate alloc;
 mod affine;
 mod bvh;
 mod cells;
+mod cone;
 mod displacement;
 mod distance_map;
 mod geometry_image;
@@ -54,6 +55,7 @@ mod tetra;
 
 pub use affine::AffineHit;
 pub use bvh::{ARITY, Aabb, Bvh4, Node4, SlabRay, ray_triangle};
+pub use cone::{ConeMap, ConeMapBuilder, ConeOptions, ConeTracing, Rectification, VertexQuadrics};
 pub use displacement::{
     DisplacedSurface, DisplacementError, MAX_TEXEL_COORDINATE, RootNodes, SurfaceHit, TexelPart,
     TraversalStats,

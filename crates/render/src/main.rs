@@ -47,6 +47,11 @@ enum MethodKind {
     Projective,
     /// Curved shell mapping (Jeschke et al. 2007, Coons patches); height fields only.
     Curved,
+    /// Cone tracing with silhouettes, viewing-ray rectification (Ouazzani Chahdi et al.
+    /// 2021); height fields only.
+    ConeRay,
+    /// Cone tracing with silhouettes, cone rectification; height fields only.
+    ConeCone,
     /// The pre-tessellated reference (f64).
     Tessellated,
     /// The curved shell's surface pre-tessellated (f64): the curved shell's reference.
@@ -391,6 +396,10 @@ fn main() -> ExitCode {
                 (MethodKind::Tetrahedra, Precision::F64) => Method::TetrahedraF64,
                 (MethodKind::Projective, Precision::F32) => Method::ProjectiveF32,
                 (MethodKind::Projective, Precision::F64) => Method::ProjectiveF64,
+                (MethodKind::ConeRay, Precision::F32) => Method::ConeRayF32,
+                (MethodKind::ConeRay, Precision::F64) => Method::ConeRayF64,
+                (MethodKind::ConeCone, Precision::F32) => Method::ConeConeF32,
+                (MethodKind::ConeCone, Precision::F64) => Method::ConeConeF64,
                 (MethodKind::Curved, Precision::F32) => Method::CurvedF32,
                 (MethodKind::Curved, Precision::F64) => Method::CurvedF64,
                 (MethodKind::Tessellated, _) => Method::Tessellated,
@@ -560,7 +569,9 @@ fn main() -> ExitCode {
                         | MethodKind::TessellatedCurved
                         | MethodKind::GeometryImage
                         | MethodKind::Projective
-                        | MethodKind::Curved,
+                        | MethodKind::Curved
+                        | MethodKind::ConeRay
+                        | MethodKind::ConeCone,
                     ) => false,
                     None => true,
                 };

@@ -8,8 +8,8 @@ use crate::resample::GeometryImageTracer;
 use crate::scenes::{Content, Scene};
 use crate::tessellate::Tessellated;
 use nlrt_accel::{
-    DisplacedSurface, DistanceMap, HeightField, MarchOptions, ProjectiveSurface, ShellObject,
-    ShellSurface, TraversalStats,
+    ConeMap, ConeOptions, ConeTracing, DisplacedSurface, DistanceMap, HeightField, MarchOptions,
+    ProjectiveSurface, Rectification, ShellObject, ShellSurface, TraversalStats, VertexQuadrics,
 };
 use nlrt_poly::glam::DVec3;
 use nlrt_poly::{Real, Vector3};
@@ -60,6 +60,17 @@ pub enum Method {
     ProjectiveF32,
     /// Projective displacement mapping in double precision.
     ProjectiveF64,
+    /// Cone tracing with silhouettes (Ouazzani Chahdi et al. 2021: conservative cone map,
+    /// per-vertex quadrics, viewing-ray rectification, per prism) in single precision; height
+    /// fields only.
+    ConeRayF32,
+    /// Cone tracing with viewing-ray rectification in double precision.
+    ConeRayF64,
+    /// Cone tracing with cone rectification (the paper's second correction) in single
+    /// precision; height fields only.
+    ConeConeF32,
+    /// Cone tracing with cone rectification in double precision.
+    ConeConeF64,
     /// Curved shell mapping (Jeschke et al. 2007, sec. 3.2 and 4.5: Coons patches over the
     /// vertex normals, height compression `w / 2 + 1 / 4`, heights by the interpolation of
     /// its Eq. 2, marched like [`Method::MarchingF32`]) in single precision; height fields
@@ -76,7 +87,7 @@ pub enum Method {
 
 impl Method {
     /// All methods, references last.
-    pub const ALL: [Method; 18] = [
+    pub const ALL: [Method; 22] = [
         Method::NonlinearF32,
         Method::NonlinearF64,
         Method::AffineF32,
@@ -91,6 +102,10 @@ impl Method {
         Method::TetrahedraF64,
         Method::ProjectiveF32,
         Method::ProjectiveF64,
+        Method::ConeRayF32,
+        Method::ConeRayF64,
+        Method::ConeConeF32,
+        Method::ConeConeF64,
         Method::CurvedF32,
         Method::CurvedF64,
         Method::Tessellated,
@@ -115,6 +130,10 @@ impl Method {
             Method::TetrahedraF64 => "tetrahedra f64",
             Method::ProjectiveF32 => "projective f32",
             Method::ProjectiveF64 => "projective f64",
+            Method::ConeRayF32 => "cone tracing (ray rect.) f32",
+            Method::ConeRayF64 => "cone tracing (ray rect.) f64",
+            Method::ConeConeF32 => "cone tracing (cone rect.) f32",
+            Method::ConeConeF64 => "cone tracing (cone rect.) f64",
             Method::CurvedF32 => "curved shell f32",
             Method::CurvedF64 => "curved shell f64",
             Method::Tessellated => "pre-tessellated f64",
@@ -140,6 +159,10 @@ impl Method {
             Method::TetrahedraF64 => "tetrahedra-f64",
             Method::ProjectiveF32 => "projective-f32",
             Method::ProjectiveF64 => "projective-f64",
+            Method::ConeRayF32 => "cone-ray-f32",
+            Method::ConeRayF64 => "cone-ray-f64",
+            Method::ConeConeF32 => "cone-cone-f32",
+            Method::ConeConeF64 => "cone-cone-f64",
             Method::CurvedF32 => "curved-f32",
             Method::CurvedF64 => "curved-f64",
             Method::Tessellated => "tessellated-f64",
@@ -217,6 +240,10 @@ impl Method {
                     "tetrahedral shells are implemented for height fields, not instanced objects",
                 )
             }
+            Method::ConeRayF32 | Method::ConeRayF64 | Method::ConeConeF32 | Method::ConeConeF64 => {
+                (!matches!(scene.content, Content::Displacement(_)))
+                    .then_some("cone tracing renders height fields, not instanced objects")
+            }
             Method::CurvedF32 | Method::CurvedF64 | Method::TessellatedCurved => {
                 (!matches!(scene.content, Content::Displacement(_))).then_some(
                     "curved shell mapping is implemented for height fields, not instanced objects",
@@ -247,6 +274,10 @@ impl Method {
             Method::TetrahedraF64 => Box::new(Marching::<f64>::tetrahedra(scene)?),
             Method::ProjectiveF32 => Box::new(Projective::<f32>::new(scene)?),
             Method::ProjectiveF64 => Box::new(Projective::<f64>::new(scene)?),
+            Method::ConeRayF32 => Box::new(ConeTracer::<f32>::new(scene, Rectification::Ray)?),
+            Method::ConeRayF64 => Box::new(ConeTracer::<f64>::new(scene, Rectification::Ray)?),
+            Method::ConeConeF32 => Box::new(ConeTracer::<f32>::new(scene, Rectification::Cone)?),
+            Method::ConeConeF64 => Box::new(ConeTracer::<f64>::new(scene, Rectification::Cone)?),
             Method::CurvedF32 => Box::new(Marching::<f32>::curved(scene)?),
             Method::CurvedF64 => Box::new(Marching::<f64>::curved(scene)?),
             Method::Tessellated => Box::new(Tessellated::new(scene)),
@@ -514,6 +545,81 @@ impl<T: Real> Tracer for Marching<T> {
                 SampledShell::DistanceMap(map) => map.memory_bytes(),
                 _ => 0,
             }
+    }
+}
+
+/// Cone tracing with silhouettes in precision `T` ([`DisplacedSurface::intersect_cone_traced`]).
+pub struct ConeTracer<T: Real> {
+    surface: DisplacedSurface<T>,
+    cone: ConeTracing<T>,
+}
+
+impl<T: Real> ConeTracer<T> {
+    /// Builds the cone map (rows in parallel) and the quadrics; `None` for scenes that are not
+    /// height fields.
+    #[must_use]
+    pub fn new(scene: &Scene, rectification: Rectification) -> Option<Self> {
+        Self::with_quadrics(scene, rectification, true)
+    }
+
+    /// [`ConeTracer::new`], or with flat quadrics when `silhouettes` is false: the original
+    /// cone tracing, whose silhouettes the paper corrects (for comparison).
+    #[must_use]
+    pub fn with_quadrics(
+        scene: &Scene,
+        rectification: Rectification,
+        silhouettes: bool,
+    ) -> Option<Self> {
+        let Nonlinear::Displaced(surface) = Nonlinear::<T>::new(scene) else {
+            return None;
+        };
+        let cones = {
+            use rayon::prelude::*;
+            let builder = ConeMap::builder(surface.field());
+            let mut ratio = vec![0.0f32; builder.len()];
+            ratio
+                .par_chunks_mut(builder.row_len())
+                .enumerate()
+                .for_each(|(j, row)| builder.fill_row(j, row));
+            builder.finish(ratio)
+        };
+        let quadrics = if silhouettes {
+            VertexQuadrics::new(surface.mesh())
+        } else {
+            VertexQuadrics::flat(surface.mesh().positions().len())
+        };
+        let options = ConeOptions {
+            rectification,
+            ..ConeOptions::default()
+        };
+        Some(Self {
+            surface,
+            cone: ConeTracing {
+                cones,
+                quadrics,
+                options,
+            },
+        })
+    }
+}
+
+impl<T: Real> Tracer for ConeTracer<T> {
+    fn intersect(&self, origin: DVec3, dir: DVec3, t_min: f64, t_max: f64) -> Option<TraceHit> {
+        let (ray, t_min, t_max) = ray_in::<T>(origin, dir, t_min, t_max)?;
+        let mut stats = TraversalStats::default();
+        let hit = self
+            .surface
+            .intersect_cone_traced(&ray, t_min, t_max, &self.cone, &mut stats)?;
+        let n = self.surface.normal(&hit, ray.dir)?;
+        Some(TraceHit {
+            t: hit.hit.t.to_f64(),
+            normal: to_dvec3::<T>(n),
+            id: hit.triangle,
+        })
+    }
+
+    fn memory_bytes(&self) -> usize {
+        self.surface.memory_bytes() + self.cone.memory_bytes()
     }
 }
 

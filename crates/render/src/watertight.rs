@@ -313,12 +313,17 @@ pub fn measure(scene: &Scene, rays_side: usize, method: Method) -> Result<LeakRe
         | Method::ProjectiveF32
         | Method::ProjectiveF64
         | Method::CurvedF32
-        | Method::CurvedF64 => Err(format!(
+        | Method::CurvedF64
+        | Method::ConeRayF32
+        | Method::ConeRayF64
+        | Method::ConeConeF32
+        | Method::ConeConeF64 => Err(format!(
             "{method}: watertightness is measured for nonlinear and tessellation-free tracing \
              and the smooth and tetrahedral shells (the references and geometry images are \
              other surfaces: flat triangles through re-sampled points, which need not lie above \
              the base near its edges; projective mapping displaces over other prisms; the \
-             curved shell bends out of the prisms where they are thin for their curvature)"
+             curved shell bends out of the prisms where they are thin for their curvature; cone \
+             tracing gives up a prism where the quadric says the ray left the relief)"
         )),
     }
 }
