@@ -525,16 +525,23 @@ impl<T: Real> DisplacedSurface<T> {
             let uv = prism.texture_uv(u, v);
             T::ONE - self.surface_height(uv.x(), uv.y()).0
         };
-        let cone_at = |s: T| {
+        // The cones of the four samples around the point at world distance s: their
+        // horizontal distance from it, apex depth and ratio.
+        let cones_at = |s: T| {
             let (x, y) = (x0 + gx * s, y0 + gy * s);
             let (i, j) = (floor(x), floor(y));
             let corners = self.field().texel_corners(i, j);
-            let top = corners.iter().copied().max().unwrap_or(0);
-            let ratio = [(i, j), (i + 1, j), (i, j + 1), (i + 1, j + 1)]
-                .iter()
-                .map(|&(a, b)| cones.ratio(a, b))
-                .fold(f32::INFINITY, f32::min);
-            (T::ONE - Self::height(top), T::from_f64(f64::from(ratio)))
+            let at = [(i, j), (i + 1, j), (i, j + 1), (i + 1, j + 1)];
+            core::array::from_fn::<_, 4, _>(|k| {
+                let (a, b) = at[k];
+                let (dx, dy) = (x - T::from_f64(a as f64), y - T::from_f64(b as f64));
+                let ratio = T::from_f64(f64::from(cones.ratio(a, b)));
+                (
+                    (dx * dx + dy * dy).sqrt(),
+                    T::ONE - Self::height(corners[k]),
+                    ratio,
+                )
+            })
         };
         let below = |s: T| bent(s) >= surface_depth(s);
         let mut previous = T::ZERO;
@@ -575,27 +582,32 @@ impl<T: Real> DisplacedSurface<T> {
             if s >= length {
                 return None;
             }
-            let (apex, ratio) = cone_at(s);
-            // The cone and the point's depth as the rectification sees them.
-            let (apex, ratio, depth, rate) = match opts.rectification {
-                Rectification::Ray => (apex, ratio, bent(s), slope + T::TWO * bend * s),
-                Rectification::Cone => {
-                    let bent_apex = apex - bend * s * s;
-                    let scaled = if apex > T::ZERO {
-                        ratio * (bent_apex / apex).max(T::ZERO)
-                    } else {
-                        ratio
-                    };
-                    (bent_apex, scaled, straight(s), slope)
-                }
-            };
-            // Eq. 4 for a ray whose depth changes at `rate` per unit s: stay in the cone
-            // while speed_xy ds <= ratio (apex - depth - rate ds).
+            // Eq. 4, for a cone whose apex is `offset` away horizontally and a ray whose
+            // depth changes at `rate` per unit s: it stays in the cone while
+            // offset + speed_xy ds <= ratio (apex - depth - rate ds). Any one of the four
+            // cones that holds the point gives a step that meets no sample.
             let mut step = half_texel;
-            if depth < apex && ratio > T::ZERO {
+            for (offset, apex, ratio) in cones_at(s) {
+                // The cone and the point's depth as the rectification sees them.
+                let (apex, ratio, depth, rate) = match opts.rectification {
+                    Rectification::Ray => (apex, ratio, bent(s), slope + T::TWO * bend * s),
+                    Rectification::Cone => {
+                        let bent_apex = apex - bend * s * s;
+                        let scaled = if apex > T::ZERO {
+                            ratio * (bent_apex / apex).max(T::ZERO)
+                        } else {
+                            ratio
+                        };
+                        (bent_apex, scaled, straight(s), slope)
+                    }
+                };
+                let room = ratio * (apex - depth) - offset;
+                if !(room > T::ZERO) {
+                    continue;
+                }
                 let denominator = speed_xy + ratio * rate;
                 let cone_step = if denominator > T::ZERO {
-                    ratio * (apex - depth) / denominator
+                    room / denominator
                 } else {
                     length - s
                 };
