@@ -303,121 +303,183 @@ impl<T: Real> DisplacedSurface<T> {
         shell: Marched<'_>,
         stats: &mut TraversalStats,
     ) -> Option<SurfaceHit<T>> {
-        let world = |t: T| ray.origin + ray.dir * t;
-        // Entry and exit heights by sec. 4.2's bisection, except where the prism test saw
-        // the ray cross a cap (height exactly 0 or 1): there the cap's height is known, and
-        // the bisection's 2^-13 would lift an exit through the base above a zero-height
-        // surface, so the ray would leave without hitting it.
-        let canonical = |t: T, h: T| {
-            if h == T::ZERO || h == T::ONE {
-                barycentric_at(prism, world(t), h).map(|(a, b)| [a, b, h])
-            } else {
-                world_to_canonical_bisect(prism, world(t))
-            }
+        let medium = HeightMedium {
+            surface: self,
+            shell,
         };
-        let start = canonical(span.t_in, span.h_in)?;
-        let end = canonical(span.t_out, span.h_out)?;
-        let uv = |c: &[T; 3]| prism.texture_uv(c[0], c[1]);
-        let count = self.sample_steps(uv(&start), uv(&end), opts) + 1;
-        let cos_limit = T::from_f64(opts.max_angle).cos();
-        let inside = |c: &[T; 3]| c[0] >= T::ZERO && c[1] >= T::ZERO && c[0] + c[1] <= T::ONE;
-        // The sample's texture height: the smooth shell's height itself, or by Eq. 2 between
-        // the curved shell's bounding surfaces.
-        let texture_height = |c: &[T; 3]| {
-            if matches!(shell, Marched::Curved) {
-                prism.curved_texture_height(c[0], c[1], c[2])
-            } else {
-                c[2]
-            }
-        };
-        let below = |c: &[T; 3]| {
-            let p = uv(c);
-            let (h, texel, part) = self.surface_height(p.x(), p.y());
-            (texture_height(c) <= h, texel, part)
-        };
-        let lerp = |a: &[T; 3], b: &[T; 3], s: T| {
-            [
-                a[0] + (b[0] - a[0]) * s,
-                a[1] + (b[1] - a[1]) * s,
-                a[2] + (b[2] - a[2]) * s,
-            ]
-        };
-        let mut previous = start;
-        let mut current = start;
-        // Fixed steps left to the exit (fractional after distance-map jumps).
-        let mut remaining = T::from_i32(count as i32);
-        for _ in 0..opts.max_samples.max(2) {
-            if !(remaining > T::ZERO) {
-                break;
-            }
-            stats.texel_tests += 1;
-            // Linear step from the last (possibly corrected) sample towards the exit: one
-            // fixed step, or the empty radius of the distance map where that is longer (its
-            // cells: `cell_texels` texels in u and v, 1 / layers in height).
-            let mut fraction = T::ONE / remaining;
-            let mut jumped = false;
-            if let Marched::DistanceMap(map) = shell {
-                let (a, b) = (uv(&current), uv(&end));
-                let r = map.radius_at(a.x() / self.texel_size, a.y() / self.texel_size, current[2]);
-                if r > 0 {
-                    let cell = self.texel_size * T::from_i32(map.cell_texels() as i32);
-                    let extent = ((b.x() - a.x()).abs() / cell)
-                        .max((b.y() - a.y()).abs() / cell)
-                        .max((end[2] - current[2]).abs() * T::from_i32(map.layers() as i32));
-                    let jump = T::from_i32(i32::from(r)) / extent;
-                    if jump > fraction {
-                        (fraction, jumped) = (jump, true);
-                    }
-                }
-            }
-            let fraction = fraction.min(T::ONE);
-            remaining = if fraction == T::ONE {
-                T::ZERO
-            } else if jumped {
-                remaining * (T::ONE - fraction)
-            } else {
-                remaining - T::ONE
-            };
-            let mut sample = lerp(&current, &end, fraction);
-            // Sec. 4.3: correct the sample onto the ray when its direction strays too far.
-            let q = prism.shell_point(sample[0], sample[1], sample[2]);
-            let to_q = q - ray.origin;
-            let len = to_q.length();
-            if len > T::ZERO && to_q.dot(ray.dir) < cos_limit * len {
-                let s0 = prism.vertex(0, sample[2]);
-                let n = (prism.vertex(1, sample[2]) - s0).cross(prism.vertex(2, sample[2]) - s0);
-                let denom = n.dot(ray.dir);
-                if denom != T::ZERO {
-                    let t = n.dot(s0 - ray.origin) / denom;
-                    if let Some((a, b)) = barycentric_at(prism, world(t), sample[2]) {
-                        sample = [a, b, sample[2]];
-                    }
-                }
-            }
-            // The paper's test: the first sample inside the prism and under the surface is a
-            // hit. So the volume under the surface is solid: where a mesh border's open side
-            // is seen (the mountain's edges), its side walls are hit, which the other methods
-            // (a surface, not a solid) do not do; the report measures the difference.
-            if inside(&sample) && below(&sample).0 {
-                // Binary search between the last sample above and this one.
-                let (mut lo, mut hi) = (previous, sample);
-                for _ in 0..REFINE_STEPS {
-                    let mid = lerp(&lo, &hi, T::HALF);
-                    if below(&mid).0 {
-                        hi = mid;
-                    } else {
-                        lo = mid;
-                    }
-                }
-                let p = prism.shell_point(hi[0], hi[1], hi[2]);
-                let t = (p - ray.origin).dot(ray.dir);
-                return Some(self.sampled_hit(tri, prism, [hi[0], hi[1], texture_height(&hi)], t));
-            }
-            previous = sample;
-            current = sample;
-        }
-        None
+        let (c, t) = march_segment(prism, ray, span, opts, &medium, stats)?;
+        Some(self.sampled_hit(
+            tri,
+            prism,
+            [c[0], c[1], medium.texture_height(prism, &c)],
+            t,
+        ))
     }
+}
+
+/// What a marcher samples in a prism's canonical space: which points are solid, how many
+/// fixed steps a segment needs, and how far it may jump through empty space.
+pub(crate) trait Medium<T: Real> {
+    /// Whether canonical point `c` (alpha, beta, h) of `prism` is solid.
+    fn solid(&self, prism: &Prism<T>, c: &[T; 3]) -> bool;
+    /// Fixed steps for the canonical segment from `start` to `end`.
+    fn steps(&self, prism: &Prism<T>, start: &[T; 3], end: &[T; 3], opts: &MarchOptions) -> usize;
+    /// The fraction of the segment from `current` to `end` that is known to be empty (0
+    /// where nothing is known).
+    fn empty_fraction(&self, _prism: &Prism<T>, _current: &[T; 3], _end: &[T; 3]) -> T {
+        T::ZERO
+    }
+}
+
+/// The height field as a marcher sees it.
+struct HeightMedium<'a, T: Real> {
+    surface: &'a DisplacedSurface<T>,
+    shell: Marched<'a>,
+}
+
+impl<T: Real> HeightMedium<'_, T> {
+    /// The sample's texture height: the smooth shell's height itself, or by Eq. 2 between the
+    /// curved shell's bounding surfaces.
+    fn texture_height(&self, prism: &Prism<T>, c: &[T; 3]) -> T {
+        if matches!(self.shell, Marched::Curved) {
+            prism.curved_texture_height(c[0], c[1], c[2])
+        } else {
+            c[2]
+        }
+    }
+}
+
+impl<T: Real> Medium<T> for HeightMedium<'_, T> {
+    fn solid(&self, prism: &Prism<T>, c: &[T; 3]) -> bool {
+        let p = prism.texture_uv(c[0], c[1]);
+        self.texture_height(prism, c) <= self.surface.surface_height(p.x(), p.y()).0
+    }
+
+    fn steps(&self, prism: &Prism<T>, start: &[T; 3], end: &[T; 3], opts: &MarchOptions) -> usize {
+        let uv = |c: &[T; 3]| prism.texture_uv(c[0], c[1]);
+        self.surface.sample_steps(uv(start), uv(end), opts)
+    }
+
+    /// The distance map's empty radius (its cells: `cell_texels` texels in u and v,
+    /// 1 / layers in height) over the segment's extent in cells.
+    fn empty_fraction(&self, prism: &Prism<T>, current: &[T; 3], end: &[T; 3]) -> T {
+        let Marched::DistanceMap(map) = self.shell else {
+            return T::ZERO;
+        };
+        let size = self.surface.texel_size;
+        let (a, b) = (
+            prism.texture_uv(current[0], current[1]),
+            prism.texture_uv(end[0], end[1]),
+        );
+        let r = map.radius_at(a.x() / size, a.y() / size, current[2]);
+        if r == 0 {
+            return T::ZERO;
+        }
+        let cell = size * T::from_i32(map.cell_texels() as i32);
+        let extent = ((b.x() - a.x()).abs() / cell)
+            .max((b.y() - a.y()).abs() / cell)
+            .max((end[2] - current[2]).abs() * T::from_i32(map.layers() as i32));
+        T::from_i32(i32::from(r)) / extent
+    }
+}
+
+/// Marches `ray` through `prism` over `span` in canonical space (sec. 4.2-4.3, see the module
+/// documentation): the refined canonical point of the first solid sample and its distance.
+pub(crate) fn march_segment<T: Real>(
+    prism: &Prism<T>,
+    ray: &Ray<T>,
+    span: &PrismSpan<T>,
+    opts: &MarchOptions,
+    medium: &impl Medium<T>,
+    stats: &mut TraversalStats,
+) -> Option<([T; 3], T)> {
+    let world = |t: T| ray.origin + ray.dir * t;
+    // Entry and exit heights by sec. 4.2's bisection, except where the prism test saw the
+    // ray cross a cap (height exactly 0 or 1): there the cap's height is known, and the
+    // bisection's 2^-13 would lift an exit through the base above a zero-height surface, so
+    // the ray would leave without hitting it.
+    let canonical = |t: T, h: T| {
+        if h == T::ZERO || h == T::ONE {
+            barycentric_at(prism, world(t), h).map(|(a, b)| [a, b, h])
+        } else {
+            world_to_canonical_bisect(prism, world(t))
+        }
+    };
+    let start = canonical(span.t_in, span.h_in)?;
+    let end = canonical(span.t_out, span.h_out)?;
+    let count = medium.steps(prism, &start, &end, opts) + 1;
+    let cos_limit = T::from_f64(opts.max_angle).cos();
+    let inside = |c: &[T; 3]| c[0] >= T::ZERO && c[1] >= T::ZERO && c[0] + c[1] <= T::ONE;
+    let lerp = |a: &[T; 3], b: &[T; 3], s: T| {
+        [
+            a[0] + (b[0] - a[0]) * s,
+            a[1] + (b[1] - a[1]) * s,
+            a[2] + (b[2] - a[2]) * s,
+        ]
+    };
+    let mut previous = start;
+    let mut current = start;
+    // Fixed steps left to the exit (fractional after jumps through empty space).
+    let mut remaining = T::from_i32(count as i32);
+    for _ in 0..opts.max_samples.max(2) {
+        if !(remaining > T::ZERO) {
+            break;
+        }
+        stats.texel_tests += 1;
+        // Linear step from the last (possibly corrected) sample towards the exit: one fixed
+        // step, or the known empty space where that is longer.
+        let mut fraction = T::ONE / remaining;
+        let jump = medium.empty_fraction(prism, &current, &end);
+        let jumped = jump > fraction;
+        if jumped {
+            fraction = jump;
+        }
+        let fraction = fraction.min(T::ONE);
+        remaining = if fraction == T::ONE {
+            T::ZERO
+        } else if jumped {
+            remaining * (T::ONE - fraction)
+        } else {
+            remaining - T::ONE
+        };
+        let mut sample = lerp(&current, &end, fraction);
+        // Sec. 4.3: correct the sample onto the ray when its direction strays too far.
+        let q = prism.shell_point(sample[0], sample[1], sample[2]);
+        let to_q = q - ray.origin;
+        let len = to_q.length();
+        if len > T::ZERO && to_q.dot(ray.dir) < cos_limit * len {
+            let s0 = prism.vertex(0, sample[2]);
+            let n = (prism.vertex(1, sample[2]) - s0).cross(prism.vertex(2, sample[2]) - s0);
+            let denom = n.dot(ray.dir);
+            if denom != T::ZERO {
+                let t = n.dot(s0 - ray.origin) / denom;
+                if let Some((a, b)) = barycentric_at(prism, world(t), sample[2]) {
+                    sample = [a, b, sample[2]];
+                }
+            }
+        }
+        // The paper's test: the first sample inside the prism and in the solid is a hit. So
+        // the volume under a height field is solid: where a mesh border's open side is seen
+        // (the mountain's edges), its side walls are hit, which the other methods (a
+        // surface, not a solid) do not do; the report measures the difference.
+        if inside(&sample) && medium.solid(prism, &sample) {
+            // Binary search between the last sample outside and this one.
+            let (mut lo, mut hi) = (previous, sample);
+            for _ in 0..REFINE_STEPS {
+                let mid = lerp(&lo, &hi, T::HALF);
+                if medium.solid(prism, &mid) {
+                    hi = mid;
+                } else {
+                    lo = mid;
+                }
+            }
+            let p = prism.shell_point(hi[0], hi[1], hi[2]);
+            return Some((hi, (p - ray.origin).dot(ray.dir)));
+        }
+        previous = sample;
+        current = sample;
+    }
+    None
 }
 
 #[cfg(test)]
