@@ -52,6 +52,7 @@ mod shell;
 #[cfg(test)]
 mod test_util;
 mod tetra;
+mod volume;
 
 pub use affine::AffineHit;
 pub use bvh::{ARITY, Aabb, Bvh4, Node4, SlabRay, ray_triangle};
@@ -67,3 +68,4 @@ pub use march::MarchOptions;
 pub use mesh::{BaseMesh, MeshError, prism_bounds};
 pub use projective::ProjectiveSurface;
 pub use shell::{ShellError, ShellHit, ShellObject, ShellSurface};
+pub use volume::VoxelObject;

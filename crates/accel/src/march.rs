@@ -92,6 +92,21 @@ fn world_to_canonical_bisect<T: Real>(prism: &Prism<T>, p: T::Vec3) -> Option<[T
     Some([alpha, beta, w])
 }
 
+/// Sample steps for a segment crossing `cells` cells (texels, voxels): `samples_per_texel`
+/// per cell, rounded up, at least 1 and at most `max_samples - 1` (capped before rounding, so
+/// an infinite or NaN span from a degenerate prism becomes the cap instead of overflowing).
+pub(crate) fn sample_count(cells: f64, opts: &MarchOptions) -> usize {
+    let cap = opts.max_samples.max(2) - 1;
+    let wanted = (cells * opts.samples_per_texel).min(cap as f64);
+    let whole = wanted as usize; // ceil without std:
+    let steps = if (whole as f64) < wanted {
+        whole + 1
+    } else {
+        whole
+    };
+    steps.clamp(1, cap)
+}
+
 /// What [`DisplacedSurface::march_prism`] samples.
 #[derive(Clone, Copy, Debug)]
 enum Marched<'a> {
@@ -104,21 +119,11 @@ enum Marched<'a> {
 }
 
 impl<T: Real> DisplacedSurface<T> {
-    /// Sample steps for a texture-space segment from `a` to `b`: `samples_per_texel` per texel
-    /// crossed along its longer axis, rounded up, at least 1 and at most `max_samples - 1`
-    /// (capped before rounding, so an infinite or NaN span from a degenerate prism becomes the
-    /// cap instead of overflowing).
+    /// Sample steps for a texture-space segment from `a` to `b` ([`sample_count`] of the
+    /// texels crossed along its longer axis).
     pub(crate) fn sample_steps(&self, a: T::Vec2, b: T::Vec2, opts: &MarchOptions) -> usize {
         let texels = ((b.x() - a.x()).abs().max((b.y() - a.y()).abs()) / self.texel_size).to_f64();
-        let cap = opts.max_samples.max(2) - 1;
-        let wanted = (texels * opts.samples_per_texel).min(cap as f64);
-        let whole = wanted as usize; // ceil without std:
-        let steps = if (whole as f64) < wanted {
-            whole + 1
-        } else {
-            whole
-        };
-        steps.clamp(1, cap)
+        sample_count(texels, opts)
     }
 
     /// The hit of a sampling method at canonical point `c` (alpha, beta, h) at distance `t`,

@@ -138,7 +138,7 @@ pub struct ShellHit<T: Real> {
 /// A base mesh whose shell holds an object tiled `tiling x tiling` times per unit of uv.
 #[derive(Clone, Debug)]
 pub struct ShellSurface<T: Real> {
-    prisms: PrismTlas<T>,
+    pub(crate) prisms: PrismTlas<T>,
     object: ShellObject<T>,
 }
 

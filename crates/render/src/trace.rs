@@ -10,6 +10,7 @@ use crate::tessellate::Tessellated;
 use nlrt_accel::{
     ConeMap, ConeOptions, ConeTracing, DisplacedSurface, DistanceMap, HeightField, MarchOptions,
     ProjectiveSurface, Rectification, ShellObject, ShellSurface, TraversalStats, VertexQuadrics,
+    VoxelObject,
 };
 use nlrt_poly::glam::DVec3;
 use nlrt_poly::{Real, Vector3};
@@ -226,10 +227,7 @@ impl Method {
             Method::MarchingF32
             | Method::MarchingF64
             | Method::DistanceMapF32
-            | Method::DistanceMapF64 => (!matches!(scene.content, Content::Displacement(_)))
-                .then_some(
-                    "ray marching is implemented for height fields (no distance maps for objects)",
-                ),
+            | Method::DistanceMapF64 => None,
             Method::ProjectiveF32 | Method::ProjectiveF64 => {
                 (!matches!(scene.content, Content::Displacement(_))).then_some(
                     "projective displacement mapping renders height fields, not instanced objects",
@@ -266,6 +264,19 @@ impl Method {
             Method::AffineF64 => Box::new(TessellationFree::<f64>::new(scene)?),
             Method::GeometryImageF32 => Box::new(GeometryImageTracer::<f32>::new(scene)?),
             Method::GeometryImageF64 => Box::new(GeometryImageTracer::<f64>::new(scene)?),
+            Method::MarchingF32
+            | Method::MarchingF64
+            | Method::DistanceMapF32
+            | Method::DistanceMapF64
+                if matches!(scene.content, Content::Shell(_)) =>
+            {
+                let jumps = matches!(self, Method::DistanceMapF32 | Method::DistanceMapF64);
+                if self.name().ends_with("f32") {
+                    Box::new(VolumeMarching::<f32>::new(scene, jumps)?)
+                } else {
+                    Box::new(VolumeMarching::<f64>::new(scene, jumps)?)
+                }
+            }
             Method::MarchingF32 => Box::new(Marching::<f32>::new(scene)?),
             Method::MarchingF64 => Box::new(Marching::<f64>::new(scene)?),
             Method::DistanceMapF32 => Box::new(Marching::<f32>::distance_map(scene)?),
@@ -545,6 +556,59 @@ impl<T: Real> Tracer for Marching<T> {
                 SampledShell::DistanceMap(map) => map.memory_bytes(),
                 _ => 0,
             }
+    }
+}
+
+/// Ray marching through a voxelised instanced object in precision `T`
+/// ([`ShellSurface::intersect_marching`]): Jeschke et al.'s method for volumetric content,
+/// with or without the voxels' distance map.
+pub struct VolumeMarching<T: Real> {
+    surface: ShellSurface<T>,
+    voxels: VoxelObject,
+    opts: MarchOptions,
+    jumps: bool,
+}
+
+/// Voxels per axis of the object's tile (the paper's 3D textures: 128^3).
+pub const VOXEL_RESOLUTION: usize = 128;
+
+impl<T: Real> VolumeMarching<T> {
+    /// Voxelises the scene's object; `None` for scenes that are not shell-mapped.
+    #[must_use]
+    pub fn new(scene: &Scene, jumps: bool) -> Option<Self> {
+        let Nonlinear::Shell(surface) = Nonlinear::<T>::new(scene) else {
+            return None;
+        };
+        let voxels = VoxelObject::new(surface.object(), VOXEL_RESOLUTION);
+        Some(Self {
+            surface,
+            voxels,
+            opts: MarchOptions::default(),
+            jumps,
+        })
+    }
+}
+
+impl<T: Real> Tracer for VolumeMarching<T> {
+    fn intersect(&self, origin: DVec3, dir: DVec3, t_min: f64, t_max: f64) -> Option<TraceHit> {
+        let (ray, t_min, t_max) = ray_in::<T>(origin, dir, t_min, t_max)?;
+        let mut stats = TraversalStats::default();
+        let (s, voxels, opts) = (&self.surface, &self.voxels, &self.opts);
+        let hit = if self.jumps {
+            s.intersect_sphere_traced(&ray, t_min, t_max, voxels, opts, &mut stats)?
+        } else {
+            s.intersect_marching(&ray, t_min, t_max, voxels, opts, &mut stats)?
+        };
+        let n = self.surface.normal(&hit, ray.dir)?;
+        Some(TraceHit {
+            t: hit.hit.t.to_f64(),
+            normal: to_dvec3::<T>(n),
+            id: hit.triangle,
+        })
+    }
+
+    fn memory_bytes(&self) -> usize {
+        self.surface.memory_bytes() + self.voxels.memory_bytes()
     }
 }
 

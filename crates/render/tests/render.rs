@@ -339,8 +339,6 @@ fn methods_refuse_scenes_they_cannot_represent() {
     assert!(err.contains("overlap"), "{err}");
     for method in [
         "tessellation-free",
-        "marching",
-        "distance-map",
         "curved",
         "cone-ray",
         "cone-cone",

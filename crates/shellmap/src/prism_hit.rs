@@ -53,6 +53,21 @@ fn side_crossings<T: Real>(
         }
         let t = a.cross(b).dot(n) / nn;
         let h = a.cross(w).dot(n) / nn;
+        // A ray leaving through the edge between this side and a cap crosses both at the
+        // edge's height; rounding may put the side's `h` just outside [0, 1] and the cap's
+        // point just outside its triangle, so that the crossing would be lost (a span with
+        // an entry and no exit). Heights within the rounding bound of `h` are the edge's:
+        // gamma(16) (at most 16 roundings from the inputs to `h`, with the error of `n`
+        // bounded through |a| |w| |n|) of the magnitudes involved.
+        let nu = T::from_i32(16) * T::UNIT_ROUNDOFF;
+        let slack = nu / (T::ONE - nu) * a.length() * w.length() * n.length() / nn;
+        let h = if h < T::ZERO && h >= -slack {
+            T::ZERO
+        } else if h > T::ONE && h <= T::ONE + slack {
+            T::ONE
+        } else {
+            h
+        };
         if h >= T::ZERO && h <= T::ONE {
             out(t, h);
         }
