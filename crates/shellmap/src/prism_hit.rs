@@ -159,3 +159,62 @@ pub fn intersect_prism<T: Real>(
     }
     span
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nlrt_poly::glam::{DVec2, DVec3, Vec2, Vec3};
+
+    /// Rays leaving a right prism exactly through an edge between its base and a side (the
+    /// cap's inside test and the side's height both at their limits) still have an exit:
+    /// found when a marcher lost the whole span of such a ray (entry only). Without the
+    /// rounding bound on the side's height, f32 loses the exit of the first ray already.
+    #[test]
+    fn rays_leaving_through_a_cap_side_edge_keep_their_exit() {
+        let prism = Prism::<f64>::new(
+            [DVec3::ZERO, DVec3::new(1.0, 1.0, 0.0), DVec3::Y],
+            [DVec3::Z; 3],
+            [DVec2::ZERO, DVec2::ONE, DVec2::Y],
+        );
+        let prism32 = Prism::<f32>::new(
+            [Vec3::ZERO, Vec3::new(1.0, 1.0, 0.0), Vec3::Y],
+            [Vec3::Z; 3],
+            [Vec2::ZERO, Vec2::ONE, Vec2::Y],
+        );
+        let mut rays = 0;
+        for i in 1..40 {
+            // A point on the base's diagonal edge and on its top-left edges, aimed at from
+            // inside-above through the top cap.
+            let s = i as f64 / 40.0;
+            for (target, from) in [
+                (
+                    DVec3::new(s, s, 0.0),
+                    DVec3::new(0.1 * s, 0.2 + 0.7 * s, 1.5),
+                ),
+                (DVec3::new(0.0, s, 0.0), DVec3::new(0.3, 0.4 + 0.5 * s, 1.3)),
+                (DVec3::new(s, 1.0, 0.0), DVec3::new(0.2 * s, 0.6, 1.7)),
+            ] {
+                let dir = target - from;
+                let ray = Ray::new(from, dir).unwrap();
+                let span = intersect_prism(&prism, &ray, 0.0, f64::INFINITY).unwrap();
+                let exit = (target - from).length();
+                assert!(
+                    (span.t_out - exit).abs() < 1e-9 * exit,
+                    "{s}: {span:?} vs {exit}"
+                );
+                assert!(
+                    span.t_out > span.t_in && span.h_out.abs() < 1e-12,
+                    "{span:?}"
+                );
+                let ray32 = Ray::new(from.as_vec3(), dir.as_vec3()).unwrap();
+                let span = intersect_prism(&prism32, &ray32, 0.0, f32::INFINITY).unwrap();
+                assert!(
+                    (f64::from(span.t_out) - exit).abs() < 1e-5 * exit,
+                    "{s}: {span:?}"
+                );
+                rays += 1;
+            }
+        }
+        assert_eq!(rays, 117);
+    }
+}
