@@ -99,48 +99,72 @@ impl VoxelObject {
         this
     }
 
-    /// Radii by dilating the occupancy one voxel at a time (3 passes of 3-wide maxima).
+    /// Radii from the Chebyshev distance to the nearest occupied voxel (capped at
+    /// `MAX_RADIUS + 1`), separable: along `u` (wrapping) by two sweeps per row, then along `v`
+    /// (wrapping) and height (not wrapping) as `min over d of max(|d|, previous)`; the empty
+    /// box of radius `r` around a voxel exists while `r` is below that distance.
     fn radii(&self) -> Vec<u8> {
         let res = self.res;
+        let cap = MAX_RADIUS + 1;
         let index = |x: usize, y: usize, z: usize| x + res * (y + res * z);
-        let mut solid: Vec<bool> = (0..res * res * res).map(|i| self.bit(i)).collect();
-        let mut radius = vec![0u8; solid.len()];
-        for r in 1..=MAX_RADIUS {
-            for axis in 0..3 {
-                let before = solid.clone();
-                for z in 0..res {
-                    for y in 0..res {
-                        for x in 0..res {
-                            let c = [x, y, z];
-                            let mut any = before[index(x, y, z)];
-                            for d in [res - 1, 1] {
-                                let mut n = c;
-                                if axis == 2 {
-                                    // Height does not wrap: outside the shell is empty.
-                                    if (d == 1 && z + 1 == res) || (d != 1 && z == 0) {
-                                        continue;
-                                    }
-                                }
-                                n[axis] = (n[axis] + d) % res;
-                                any |= before[index(n[0], n[1], n[2])];
-                            }
-                            solid[index(x, y, z)] = any;
-                        }
+        let mut dist = vec![cap; res * res * res];
+        for z in 0..res {
+            for y in 0..res {
+                // Two laps of the row in each direction carry distances across the wrap.
+                let row = index(0, y, z);
+                for backwards in [false, true] {
+                    let mut d = cap;
+                    for k in 0..2 * res {
+                        let x = if backwards { 2 * res - 1 - k } else { k } % res;
+                        d = if self.bit(row + x) {
+                            0
+                        } else {
+                            (d + 1).min(cap)
+                        };
+                        dist[row + x] = dist[row + x].min(d);
                     }
                 }
             }
-            let mut grew = false;
-            for (i, &s) in solid.iter().enumerate() {
-                if !s {
-                    radius[i] = r;
-                    grew = true;
+        }
+        // Along v (wrapping) and then height (outside the shell: nothing solid), line by line.
+        let mut line = vec![0u8; res];
+        for (axis, stride) in [(1usize, res), (2, res * res)] {
+            for a in 0..res {
+                for b in 0..res {
+                    // The line's first voxel: the other two coordinates fixed.
+                    let first = if axis == 1 {
+                        index(a, 0, b)
+                    } else {
+                        index(a, b, 0)
+                    };
+                    for (k, v) in line.iter_mut().enumerate() {
+                        *v = dist[first + k * stride];
+                    }
+                    for p in 0..res {
+                        let mut best = line[p];
+                        let mut d = 1usize;
+                        // max(d, .) >= d: nothing at distance >= best can lower it.
+                        while d < usize::from(best) && d < res {
+                            for q in [p as i64 - d as i64, (p + d) as i64] {
+                                let q = if axis == 1 {
+                                    q.rem_euclid(res as i64)
+                                } else if (0..res as i64).contains(&q) {
+                                    q
+                                } else {
+                                    continue;
+                                };
+                                best = best.min((d as u8).max(line[q as usize]));
+                            }
+                            d += 1;
+                        }
+                        dist[first + p * stride] = best;
+                    }
                 }
             }
-            if !grew {
-                break;
-            }
         }
-        radius
+        dist.iter()
+            .map(|&d| d.saturating_sub(1).min(MAX_RADIUS))
+            .collect()
     }
 
     fn bit(&self, i: usize) -> bool {
