@@ -9,6 +9,8 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod edit;
+#[cfg(feature = "embree")]
+pub mod embree_reference;
 pub mod plot;
 pub mod report;
 pub mod resample;

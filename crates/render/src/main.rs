@@ -52,6 +52,8 @@ enum MethodKind {
     ConeRay,
     /// Cone tracing with silhouettes, cone rectification; height fields only.
     ConeCone,
+    /// The pre-tessellated microtriangles through Embree 3 (f32; the `embree` feature).
+    Embree,
     /// The pre-tessellated reference (f64).
     Tessellated,
     /// The curved shell's surface pre-tessellated (f64): the curved shell's reference.
@@ -402,6 +404,7 @@ fn main() -> ExitCode {
                 (MethodKind::ConeCone, Precision::F64) => Method::ConeConeF64,
                 (MethodKind::Curved, Precision::F32) => Method::CurvedF32,
                 (MethodKind::Curved, Precision::F64) => Method::CurvedF64,
+                (MethodKind::Embree, _) => Method::EmbreeF32,
                 (MethodKind::Tessellated, _) => Method::Tessellated,
                 (MethodKind::TessellatedCurved, _) => Method::TessellatedCurved,
             };
@@ -566,6 +569,7 @@ fn main() -> ExitCode {
                     }
                     Some(
                         MethodKind::Tessellated
+                        | MethodKind::Embree
                         | MethodKind::TessellatedCurved
                         | MethodKind::GeometryImage
                         | MethodKind::Projective

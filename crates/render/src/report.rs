@@ -214,6 +214,7 @@ fn speed_against_error_svg(points: &[(Method, String, f64, ErrorStats)]) -> Stri
         Method::ConeConeF64 => "#b5cf6b",
         Method::CurvedF32 => "#17becf",
         Method::CurvedF64 => "#9edae5",
+        Method::EmbreeF32 => "#000000",
         Method::Tessellated => "#2ca02c",
         Method::TessellatedCurved => "#bcbd22",
     };

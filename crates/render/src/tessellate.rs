@@ -165,6 +165,18 @@ impl Tessellated {
         }
     }
 
+    /// The world-space triangles.
+    #[must_use]
+    pub fn triangles(&self) -> &[[DVec3; 3]] {
+        &self.triangles
+    }
+
+    /// The base triangle of each triangle.
+    #[must_use]
+    pub fn base_triangles(&self) -> &[u32] {
+        &self.base
+    }
+
     /// Triangles.
     #[must_use]
     pub fn triangle_count(&self) -> usize {

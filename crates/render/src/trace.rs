@@ -79,6 +79,9 @@ pub enum Method {
     CurvedF32,
     /// Curved shell mapping in double precision.
     CurvedF64,
+    /// The pre-tessellated microtriangles traced by Embree 3 (single precision): what users pick
+    /// today. Only with the `embree` feature.
+    EmbreeF32,
     /// Pre-tessellated microtriangles in a world-space BVH (f64): the reference.
     Tessellated,
     /// The curved shell mapping's surface pre-tessellated (microtriangle vertices through the
@@ -88,7 +91,7 @@ pub enum Method {
 
 impl Method {
     /// All methods, references last.
-    pub const ALL: [Method; 22] = [
+    pub const ALL: [Method; 23] = [
         Method::NonlinearF32,
         Method::NonlinearF64,
         Method::AffineF32,
@@ -109,6 +112,7 @@ impl Method {
         Method::ConeConeF64,
         Method::CurvedF32,
         Method::CurvedF64,
+        Method::EmbreeF32,
         Method::Tessellated,
         Method::TessellatedCurved,
     ];
@@ -137,6 +141,7 @@ impl Method {
             Method::ConeConeF64 => "cone tracing (cone rect.) f64",
             Method::CurvedF32 => "curved shell f32",
             Method::CurvedF64 => "curved shell f64",
+            Method::EmbreeF32 => "Embree 3 pre-tessellated f32",
             Method::Tessellated => "pre-tessellated f64",
             Method::TessellatedCurved => "pre-tessellated curved f64",
         }
@@ -166,6 +171,7 @@ impl Method {
             Method::ConeConeF64 => "cone-cone-f64",
             Method::CurvedF32 => "curved-f32",
             Method::CurvedF64 => "curved-f64",
+            Method::EmbreeF32 => "embree-f32",
             Method::Tessellated => "tessellated-f64",
             Method::TessellatedCurved => "tessellated-curved-f64",
         }
@@ -242,6 +248,16 @@ impl Method {
                 (!matches!(scene.content, Content::Displacement(_)))
                     .then_some("cone tracing renders height fields, not instanced objects")
             }
+            Method::EmbreeF32 => {
+                if cfg!(feature = "embree") {
+                    None
+                } else {
+                    Some(
+                        "built without the `embree` feature (install libembree-dev, then \
+                         `cargo run --release --features embree`)",
+                    )
+                }
+            }
             Method::CurvedF32 | Method::CurvedF64 | Method::TessellatedCurved => {
                 (!matches!(scene.content, Content::Displacement(_))).then_some(
                     "curved shell mapping is implemented for height fields, not instanced objects",
@@ -291,6 +307,10 @@ impl Method {
             Method::ConeConeF64 => Box::new(ConeTracer::<f64>::new(scene, Rectification::Cone)?),
             Method::CurvedF32 => Box::new(Marching::<f32>::curved(scene)?),
             Method::CurvedF64 => Box::new(Marching::<f64>::curved(scene)?),
+            #[cfg(feature = "embree")]
+            Method::EmbreeF32 => Box::new(crate::embree_reference::EmbreeTessellated::new(scene)?),
+            #[cfg(not(feature = "embree"))]
+            Method::EmbreeF32 => return None,
             Method::Tessellated => Box::new(Tessellated::new(scene)),
             Method::TessellatedCurved => Box::new(Tessellated::curved(scene)),
         })

@@ -307,6 +307,7 @@ pub fn measure(scene: &Scene, rays_side: usize, method: Method) -> Result<LeakRe
         Method::TetrahedraF32 => measure_in::<f32>(scene, rays_side, method),
         Method::TetrahedraF64 => measure_in::<f64>(scene, rays_side, method),
         Method::Tessellated
+        | Method::EmbreeF32
         | Method::TessellatedCurved
         | Method::GeometryImageF32
         | Method::GeometryImageF64

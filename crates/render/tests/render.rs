@@ -428,3 +428,20 @@ fn cone_tracing_silhouette_correction_cuts_the_mismatches_on_the_cylinder() {
         assert!(corrected.depth_median < 2e-3, "{corrected:?}");
     }
 }
+
+/// With the `embree` feature: Embree 3 traces the reference's own triangles, so its hits are
+/// the f64 reference's to f32 rounding (1e-5 relative, as for the other f32 methods on these
+/// triangles), on a height field and on a shell-mapped object.
+#[cfg(feature = "embree")]
+#[test]
+fn embree_traces_the_reference_triangles() {
+    use nlrt_render::embree_reference::EmbreeTessellated;
+    for scene in [scenes::mountain(128), scenes::cornell(4)] {
+        let reference = render(&scene, &Tessellated::new(&scene), &small(), &|_| {});
+        let embree = EmbreeTessellated::new(&scene).expect("an Embree device");
+        let frame = render(&scene, &embree, &small(), &|_| {});
+        let e = compare(&frame, &reference);
+        assert!(e.mismatches <= 1, "{}: {e:?}", scene.name);
+        assert!(e.depth_max < 1e-5, "{}: {e:?}", scene.name);
+    }
+}

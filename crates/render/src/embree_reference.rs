@@ -1,0 +1,167 @@
+//! The pre-tessellated reference traced by Embree 3 (the `embree` feature): the same
+//! microtriangles as [`Tessellated`], in single precision (Embree's), in one triangle mesh of
+//! a scene built at Embree's default quality, one ray at a time (`rtcIntersect1`, incoherent
+//! context), so that the report compares against what users of displacement mapping pick today.
+//! Its memory is what Embree reports allocating through its memory-monitor callback (BVH and
+//! buffers).
+
+use std::sync::atomic::{AtomicIsize, Ordering};
+
+use embree::sys;
+use nlrt_poly::glam::DVec3;
+
+use crate::scenes::Scene;
+use crate::tessellate::Tessellated;
+use crate::trace::{TraceHit, Tracer};
+
+/// An Embree device and committed scene holding a scene's tessellation.
+pub struct EmbreeTessellated {
+    device: sys::RTCDevice,
+    scene: sys::RTCScene,
+    base: Vec<u32>,
+    /// Bytes Embree allocated (boxed: the callback holds its address).
+    allocated: Box<AtomicIsize>,
+}
+
+// SAFETY: a committed Embree scene is immutable and Embree documents `rtcIntersect1` on it as
+// safe from any number of threads; the handles are only released in `drop`.
+unsafe impl Send for EmbreeTessellated {}
+// SAFETY: as above.
+unsafe impl Sync for EmbreeTessellated {}
+
+unsafe extern "C" fn count_bytes(ptr: *mut std::ffi::c_void, bytes: isize, _post: bool) -> bool {
+    // SAFETY: `ptr` is the `AtomicIsize` registered below, alive as long as the device.
+    let counter = unsafe { &*(ptr as *const AtomicIsize) };
+    counter.fetch_add(bytes, Ordering::Relaxed);
+    true
+}
+
+impl EmbreeTessellated {
+    /// Tessellates `scene` and builds the Embree scene; `None` when Embree cannot create a
+    /// device (no supported CPU, or the library refuses).
+    #[must_use]
+    pub fn new(scene: &Scene) -> Option<Self> {
+        let tessellated = Tessellated::new(scene);
+        let triangles = tessellated.triangles();
+        let allocated = Box::new(AtomicIsize::new(0));
+        // SAFETY: plain calls of Embree's C API on handles created here and checked for null;
+        // the buffers are written within the sizes requested from Embree.
+        unsafe {
+            let device = sys::rtcNewDevice(std::ptr::null());
+            if device.is_null() {
+                return None;
+            }
+            sys::rtcSetDeviceMemoryMonitorFunction(
+                device,
+                Some(count_bytes),
+                &*allocated as *const AtomicIsize as *mut std::ffi::c_void,
+            );
+            let geometry = sys::rtcNewGeometry(device, sys::RTCGeometryType::TRIANGLE);
+            let count = triangles.len();
+            let vertices = sys::rtcSetNewGeometryBuffer(
+                geometry,
+                sys::RTCBufferType::VERTEX,
+                0,
+                sys::RTCFormat::FLOAT3,
+                3 * std::mem::size_of::<f32>(),
+                3 * count,
+            ) as *mut f32;
+            let indices = sys::rtcSetNewGeometryBuffer(
+                geometry,
+                sys::RTCBufferType::INDEX,
+                0,
+                sys::RTCFormat::UINT3,
+                3 * std::mem::size_of::<u32>(),
+                count,
+            ) as *mut u32;
+            if vertices.is_null() || indices.is_null() {
+                sys::rtcReleaseGeometry(geometry);
+                sys::rtcReleaseDevice(device);
+                return None;
+            }
+            for (k, tri) in triangles.iter().enumerate() {
+                for (c, p) in tri.iter().enumerate() {
+                    let v = vertices.add(3 * (3 * k + c));
+                    *v = p.x as f32;
+                    *v.add(1) = p.y as f32;
+                    *v.add(2) = p.z as f32;
+                    *indices.add(3 * k + c) = (3 * k + c) as u32;
+                }
+            }
+            sys::rtcCommitGeometry(geometry);
+            let handle = sys::rtcNewScene(device);
+            sys::rtcAttachGeometry(handle, geometry);
+            sys::rtcReleaseGeometry(geometry);
+            sys::rtcCommitScene(handle);
+            Some(Self {
+                device,
+                scene: handle,
+                base: tessellated.base_triangles().to_vec(),
+                allocated,
+            })
+        }
+    }
+}
+
+impl Tracer for EmbreeTessellated {
+    fn intersect(&self, origin: DVec3, dir: DVec3, t_min: f64, t_max: f64) -> Option<TraceHit> {
+        let mut rayhit = sys::RTCRayHit {
+            ray: sys::RTCRay {
+                org_x: origin.x as f32,
+                org_y: origin.y as f32,
+                org_z: origin.z as f32,
+                tnear: t_min as f32,
+                dir_x: dir.x as f32,
+                dir_y: dir.y as f32,
+                dir_z: dir.z as f32,
+                time: 0.0,
+                tfar: if t_max.is_finite() {
+                    t_max as f32
+                } else {
+                    f32::INFINITY
+                },
+                mask: u32::MAX,
+                id: 0,
+                flags: 0,
+            },
+            hit: sys::RTCHit {
+                Ng_x: 0.0,
+                Ng_y: 0.0,
+                Ng_z: 0.0,
+                u: 0.0,
+                v: 0.0,
+                primID: u32::MAX,
+                geomID: u32::MAX,
+                instID: [u32::MAX],
+            },
+        };
+        let mut context = embree::IntersectContext::incoherent();
+        // SAFETY: the scene is committed and alive; the structures are Embree's own layout.
+        unsafe { sys::rtcIntersect1(self.scene, &mut context, &mut rayhit) };
+        if rayhit.hit.geomID == u32::MAX {
+            return None;
+        }
+        let h = &rayhit.hit;
+        let n = DVec3::new(f64::from(h.Ng_x), f64::from(h.Ng_y), f64::from(h.Ng_z));
+        let n = n.try_normalize()?;
+        Some(TraceHit {
+            t: f64::from(rayhit.ray.tfar),
+            normal: if n.dot(dir) > 0.0 { -n } else { n },
+            id: self.base[h.primID as usize],
+        })
+    }
+
+    fn memory_bytes(&self) -> usize {
+        self.allocated.load(Ordering::Relaxed).max(0) as usize
+    }
+}
+
+impl Drop for EmbreeTessellated {
+    fn drop(&mut self) {
+        // SAFETY: the handles were created in `new` and are released once, scene first.
+        unsafe {
+            sys::rtcReleaseScene(self.scene);
+            sys::rtcReleaseDevice(self.device);
+        }
+    }
+}
