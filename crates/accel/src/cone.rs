@@ -30,7 +30,7 @@
 use alloc::vec;
 use alloc::vec::Vec;
 use nlrt_poly::{Real, Vector2, Vector3};
-use nlrt_shellmap::{Hit, PrismSpan, Ray, intersect_prism};
+use nlrt_shellmap::{Hit, PrismSpan, Ray};
 
 use crate::displacement::{DisplacedSurface, SurfaceHit, TraversalStats};
 use crate::{BaseMesh, HEIGHT_ONE, HeightField, Wrap};
@@ -438,13 +438,9 @@ impl<T: Real> DisplacedSurface<T> {
         cone: &ConeTracing<T>,
         stats: &mut TraversalStats,
     ) -> Option<SurfaceHit<T>> {
-        self.prisms
-            .traverse(ray, t_min, t_max, |tri, prism, t_max| {
-                stats.prism_tests += 1;
-                let span = intersect_prism(prism, ray, t_min, t_max)?;
-                let hit = self.cone_trace_prism(tri, ray, &span, cone, stats)?;
-                (hit.hit.t > t_min && hit.hit.t < t_max).then_some((hit, hit.hit.t))
-            })
+        self.per_prism_span(ray, t_min, t_max, stats, |tri, _, span, stats| {
+            self.cone_trace_prism(tri, ray, span, cone, stats)
+        })
     }
 
     fn cone_trace_prism(
@@ -767,13 +763,7 @@ mod tests {
     #[test]
     fn degenerate_triangles_give_a_defined_outcome() {
         let field = HeightField::from_unit_heights(4, &[0.5; 16], Wrap::Clamp).unwrap();
-        let line = BaseMesh::<f64>::new(
-            vec![DVec3::ZERO, DVec3::X, DVec3::new(2.0, 0.0, 0.0)],
-            vec![DVec3::Z; 3],
-            vec![DVec2::ZERO, DVec2::X, DVec2::Y],
-            vec![[0, 1, 2]],
-        )
-        .unwrap();
+        let line = crate::test_util::world_line_triangle();
         let flat = DisplacedSurface::new(line, field.clone(), 1.0, 1.0).unwrap();
         let uv_line =
             DisplacedSurface::new(crate::test_util::uv_line_triangle(), field, 1.0, 1.0).unwrap();

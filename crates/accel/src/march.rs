@@ -119,6 +119,31 @@ enum Marched<'a> {
 }
 
 impl<T: Real> DisplacedSurface<T> {
+    /// The nearest hit of a per-prism method: TLAS traversal (nearest first), the exact
+    /// ray-prism test, then `method(triangle, prism, span, stats)` on the prism's span; hits
+    /// outside `(t_min, t_max)` (shrunk as hits are found) are dropped.
+    pub(crate) fn per_prism_span(
+        &self,
+        ray: &Ray<T>,
+        t_min: T,
+        t_max: T,
+        stats: &mut TraversalStats,
+        mut method: impl FnMut(
+            usize,
+            &Prism<T>,
+            &PrismSpan<T>,
+            &mut TraversalStats,
+        ) -> Option<SurfaceHit<T>>,
+    ) -> Option<SurfaceHit<T>> {
+        self.prisms
+            .traverse(ray, t_min, t_max, |tri, prism, t_max| {
+                stats.prism_tests += 1;
+                let span = intersect_prism(prism, ray, t_min, t_max)?;
+                let hit = method(tri, prism, &span, stats)?;
+                (hit.hit.t > t_min && hit.hit.t < t_max).then_some((hit, hit.hit.t))
+            })
+    }
+
     /// Sample steps for a texture-space segment from `a` to `b` ([`sample_count`] of the
     /// texels crossed along its longer axis).
     pub(crate) fn sample_steps(&self, a: T::Vec2, b: T::Vec2, opts: &MarchOptions) -> usize {
@@ -197,13 +222,9 @@ impl<T: Real> DisplacedSurface<T> {
         opts: &MarchOptions,
         stats: &mut TraversalStats,
     ) -> Option<SurfaceHit<T>> {
-        self.prisms
-            .traverse(ray, t_min, t_max, |tri, prism, t_max| {
-                stats.prism_tests += 1;
-                let span = intersect_prism(prism, ray, t_min, t_max)?;
-                let hit = self.march_prism(tri, prism, ray, &span, opts, Marched::Smooth, stats)?;
-                (hit.hit.t > t_min && hit.hit.t < t_max).then_some((hit, hit.hit.t))
-            })
+        self.per_prism_span(ray, t_min, t_max, stats, |tri, prism, span, stats| {
+            self.march_prism(tri, prism, ray, span, opts, Marched::Smooth, stats)
+        })
     }
 
     /// The nearest hit of `ray` with `t` in `(t_min, t_max)` by curved shell mapping
@@ -222,13 +243,9 @@ impl<T: Real> DisplacedSurface<T> {
         opts: &MarchOptions,
         stats: &mut TraversalStats,
     ) -> Option<SurfaceHit<T>> {
-        self.prisms
-            .traverse(ray, t_min, t_max, |tri, prism, t_max| {
-                stats.prism_tests += 1;
-                let span = intersect_prism(prism, ray, t_min, t_max)?;
-                let hit = self.march_prism(tri, prism, ray, &span, opts, Marched::Curved, stats)?;
-                (hit.hit.t > t_min && hit.hit.t < t_max).then_some((hit, hit.hit.t))
-            })
+        self.per_prism_span(ray, t_min, t_max, stats, |tri, prism, span, stats| {
+            self.march_prism(tri, prism, ray, span, opts, Marched::Curved, stats)
+        })
     }
 
     /// The nearest hit of `ray` with `t` in `(t_min, t_max)` by smooth shell mapping with ray
@@ -249,14 +266,17 @@ impl<T: Real> DisplacedSurface<T> {
         opts: &MarchOptions,
         stats: &mut TraversalStats,
     ) -> Option<SurfaceHit<T>> {
-        let shell = Marched::DistanceMap(map);
-        self.prisms
-            .traverse(ray, t_min, t_max, |tri, prism, t_max| {
-                stats.prism_tests += 1;
-                let span = intersect_prism(prism, ray, t_min, t_max)?;
-                let hit = self.march_prism(tri, prism, ray, &span, opts, shell, stats)?;
-                (hit.hit.t > t_min && hit.hit.t < t_max).then_some((hit, hit.hit.t))
-            })
+        self.per_prism_span(ray, t_min, t_max, stats, |tri, prism, span, stats| {
+            self.march_prism(
+                tri,
+                prism,
+                ray,
+                span,
+                opts,
+                Marched::DistanceMap(map),
+                stats,
+            )
+        })
     }
 
     /// The world-space unit normal at a hit of [`DisplacedSurface::intersect_curved_marching`],

@@ -28,3 +28,15 @@ pub(crate) fn uv_line_triangle() -> BaseMesh<f64> {
     )
     .expect("a valid triangle")
 }
+
+/// The triangle `(0, 0, 0), (1, 0, 0), (2, 0, 0)` with normals `+z` and regular uvs:
+/// degenerate in world (a line), not in uv.
+pub(crate) fn world_line_triangle() -> BaseMesh<f64> {
+    BaseMesh::new(
+        vec![DVec3::ZERO, DVec3::X, DVec3::new(2.0, 0.0, 0.0)],
+        vec![DVec3::Z; 3],
+        vec![DVec2::ZERO, DVec2::X, DVec2::Y],
+        vec![[0, 1, 2]],
+    )
+    .expect("a valid triangle")
+}

@@ -262,9 +262,8 @@ mod tests {
 #[cfg(test)]
 mod degenerate {
     use super::*;
-    use crate::{BaseMesh, HeightField, Wrap};
-    use alloc::vec;
-    use nlrt_poly::glam::{DVec2, DVec3};
+    use crate::{HeightField, Wrap};
+    use nlrt_poly::glam::DVec3;
 
     /// A base triangle of zero world area (a line) has flat tetrahedra and flat prisms: the
     /// sampling methods report no hit and do not panic, for rays across it from any side;
@@ -272,13 +271,7 @@ mod degenerate {
     #[test]
     fn world_degenerate_triangles_are_not_hit_uv_degenerate_ones_are() {
         let field = HeightField::from_unit_heights(4, &[0.5; 16], Wrap::Clamp).unwrap();
-        let line = BaseMesh::<f64>::new(
-            vec![DVec3::ZERO, DVec3::X, DVec3::new(2.0, 0.0, 0.0)],
-            vec![DVec3::Z; 3],
-            vec![DVec2::ZERO, DVec2::X, DVec2::Y],
-            vec![[0, 1, 2]],
-        )
-        .unwrap();
+        let line = crate::test_util::world_line_triangle();
         let flat = DisplacedSurface::new(line, field.clone(), 1.0, 1.0).unwrap();
         let uv_line = crate::test_util::uv_line_triangle();
         let degenerate_uv = DisplacedSurface::new(uv_line, field, 1.0, 1.0).unwrap();
