@@ -379,6 +379,48 @@ mod tests {
             .collect()
     }
 
+    /// A base triangle of zero world area has no shell: no hit from any side; one degenerate
+    /// in uv (a line) still holds a volume, marched through the voxels of that line.
+    #[test]
+    fn degenerate_base_triangles_give_a_defined_outcome() {
+        let object = ShellObject::<f64>::new(cube(DVec3::splat(0.0), DVec3::splat(1.0))).unwrap();
+        let voxels = VoxelObject::new(&object, 16);
+        let opts = MarchOptions::default();
+        let mut st = TraversalStats::default();
+        let flat = ShellSurface::new(
+            crate::test_util::world_line_triangle(),
+            object.clone(),
+            1.0,
+            1.0,
+        )
+        .unwrap();
+        for dir in [
+            DVec3::new(0.0, 0.0, -1.0),
+            DVec3::new(0.0, 1.0, -1.0),
+            DVec3::Y,
+        ] {
+            let ray = Ray::new(DVec3::new(0.5, 0.0, 0.25) - dir, dir).unwrap();
+            let far = f64::INFINITY;
+            assert!(
+                flat.intersect_marching(&ray, 0.0, far, &voxels, &opts, &mut st)
+                    .is_none()
+            );
+            assert!(
+                flat.intersect_sphere_traced(&ray, 0.0, far, &voxels, &opts, &mut st)
+                    .is_none()
+            );
+        }
+        // uvs on the tile's diagonal: the cube's voxels there are its faces' only at the tile
+        // corners, and the top face (h = 1) lies along the whole line.
+        let uv_line =
+            ShellSurface::new(crate::test_util::uv_line_triangle(), object, 1.0, 1.0).unwrap();
+        let down = Ray::new(DVec3::new(0.2, 0.2, 2.0), DVec3::new(0.0, 0.0, -1.0)).unwrap();
+        let hit = uv_line
+            .intersect_marching(&down, 0.0, f64::INFINITY, &voxels, &opts, &mut st)
+            .expect("the top face's voxels along the line");
+        assert!((hit.hit.t - 1.0).abs() <= 1.0 / 16.0 + 1e-3, "{hit:?}");
+    }
+
     #[test]
     fn radii_are_empty_boxes_by_brute_force() {
         let object =
