@@ -512,9 +512,16 @@ impl<T: Real> DisplacedSurface<T> {
         let bent = |s: T| straight(s) + bend * s * s;
         // Surface depth and the cone (apex depth = the texel's top, ratio = the least of its
         // corners') at world distance s.
+        // floor to i32, as the texel lookups of the height field do: a huge or non-finite
+        // coordinate (a degenerate prism's linearisation) saturates, and the neighbours at +1
+        // stay in i64's range.
         let floor = |x: T| {
-            let i = x.to_f64() as i64;
-            if (i as f64) > x.to_f64() { i - 1 } else { i }
+            let i = x.to_f64() as i32;
+            i64::from(if f64::from(i) > x.to_f64() {
+                i.saturating_sub(1)
+            } else {
+                i
+            })
         };
         let surface_depth = |s: T| {
             let (u, v) = (a0 + da * s, b0 + db * s);

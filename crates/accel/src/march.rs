@@ -183,7 +183,12 @@ impl<T: Real> DisplacedSurface<T> {
         let (fu, fv) = (u / self.texel_size, v / self.texel_size);
         let floor = |x: T| {
             let i = x.to_f64() as i32;
-            if T::from_i32(i) > x { i - 1 } else { i }
+            // Saturating: a coordinate below i32's range (a degenerate prism) stays in it.
+            if T::from_i32(i) > x {
+                i.saturating_sub(1)
+            } else {
+                i
+            }
         };
         let (x, y) = (floor(fu), floor(fv));
         let (a, b) = (fu - T::from_i32(x), fv - T::from_i32(y));
