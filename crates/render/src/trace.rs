@@ -334,6 +334,19 @@ pub struct TraceHit {
     pub id: u32,
 }
 
+impl TraceHit {
+    /// A hit found in precision `T`: distance, unit normal facing against the ray, base
+    /// triangle.
+    #[must_use]
+    pub(crate) fn from_precision<T: Real>(t: T, normal: T::Vec3, id: u32) -> Self {
+        Self {
+            t: t.to_f64(),
+            normal: to_dvec3::<T>(normal),
+            id,
+        }
+    }
+}
+
 /// A renderer ray (f64) in precision `T` with its distance range (an infinite `t_max` stays
 /// infinite); `None` for a zero or non-finite direction.
 pub(crate) fn ray_in<T: Real>(
@@ -418,11 +431,7 @@ impl<T: Real> Tracer for Nonlinear<T> {
                 (hit.hit.t, s.normal(&hit, ray.dir)?, hit.triangle)
             }
         };
-        Some(TraceHit {
-            t: t.to_f64(),
-            normal: to_dvec3::<T>(n),
-            id,
-        })
+        Some(TraceHit::from_precision::<T>(t, n, id))
     }
 
     fn memory_bytes(&self) -> usize {
@@ -454,11 +463,7 @@ impl<T: Real> Tracer for TessellationFree<T> {
         let mut stats = TraversalStats::default();
         let hit = self.0.intersect_affine(&ray, t_min, t_max, &mut stats)?;
         let n = DisplacedSurface::affine_normal(&hit, ray.dir)?;
-        Some(TraceHit {
-            t: hit.t.to_f64(),
-            normal: to_dvec3::<T>(n),
-            id: hit.triangle,
-        })
+        Some(TraceHit::from_precision::<T>(hit.t, n, hit.triangle))
     }
 
     fn memory_bytes(&self) -> usize {
@@ -563,11 +568,7 @@ impl<T: Real> Tracer for Marching<T> {
             SampledShell::Curved => s.curved_normal(&hit, ray.dir)?,
             _ => s.normal(&hit, ray.dir)?,
         };
-        Some(TraceHit {
-            t: hit.hit.t.to_f64(),
-            normal: to_dvec3::<T>(n),
-            id: hit.triangle,
-        })
+        Some(TraceHit::from_precision::<T>(hit.hit.t, n, hit.triangle))
     }
 
     fn memory_bytes(&self) -> usize {
@@ -620,11 +621,7 @@ impl<T: Real> Tracer for VolumeMarching<T> {
             s.intersect_marching(&ray, t_min, t_max, voxels, opts, &mut stats)?
         };
         let n = self.surface.normal(&hit, ray.dir)?;
-        Some(TraceHit {
-            t: hit.hit.t.to_f64(),
-            normal: to_dvec3::<T>(n),
-            id: hit.triangle,
-        })
+        Some(TraceHit::from_precision::<T>(hit.hit.t, n, hit.triangle))
     }
 
     fn memory_bytes(&self) -> usize {
@@ -695,11 +692,7 @@ impl<T: Real> Tracer for ConeTracer<T> {
             .surface
             .intersect_cone_traced(&ray, t_min, t_max, &self.cone, &mut stats)?;
         let n = self.surface.normal(&hit, ray.dir)?;
-        Some(TraceHit {
-            t: hit.hit.t.to_f64(),
-            normal: to_dvec3::<T>(n),
-            id: hit.triangle,
-        })
+        Some(TraceHit::from_precision::<T>(hit.hit.t, n, hit.triangle))
     }
 
     fn memory_bytes(&self) -> usize {
@@ -748,11 +741,7 @@ impl<T: Real> Tracer for Projective<T> {
             .surface
             .intersect(&ray, t_min, t_max, jitter, &self.opts, &mut stats)?;
         let n = self.surface.surface().normal(&hit, ray.dir)?;
-        Some(TraceHit {
-            t: hit.hit.t.to_f64(),
-            normal: to_dvec3::<T>(n),
-            id: hit.triangle,
-        })
+        Some(TraceHit::from_precision::<T>(hit.hit.t, n, hit.triangle))
     }
 
     fn memory_bytes(&self) -> usize {
