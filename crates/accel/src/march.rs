@@ -518,12 +518,6 @@ mod tests {
     use crate::{HeightField, Wrap};
     use nlrt_poly::glam::{DVec2, DVec3};
 
-    fn plane(height: f32) -> DisplacedSurface<f64> {
-        let mesh = crate::test_util::unit_square(DVec3::Z, [[0, 1, 2], [0, 2, 3]]);
-        let field = HeightField::from_unit_heights(16, &[height; 256], Wrap::Clamp).unwrap();
-        DisplacedSurface::new(mesh, field, 1.0, 1.0).unwrap()
-    }
-
     #[test]
     fn bisection_finds_heights_to_its_resolution() {
         let prism = Prism::<f64>::new(
@@ -547,47 +541,30 @@ mod tests {
 
     #[test]
     fn a_flat_map_on_a_constant_normal_prism_is_hit_exactly_enough() {
-        // Constant normals: the mapping is linear, the surface a plane at the stored height;
-        // the hit is found to the binary search's resolution (2^-10 of a sample step).
-        let surface = plane(0.4);
-        let stored = f64::from(surface.field().sample(0, 0)) / f64::from(crate::HEIGHT_ONE);
+        // Constant normals: the mapping is linear, the surface a plane at the stored height.
+        let (surface, stored) = crate::test_util::flat_map_square(0.4);
         let opts = MarchOptions::default();
-        for i in 0..100 {
-            let (x, y) = (0.05 + 0.007 * i as f64, 0.9 - 0.008 * i as f64);
-            let ray = Ray::new(DVec3::new(x, y, 2.0), DVec3::new(0.1, 0.05, -1.0)).unwrap();
-            let hit = surface
-                .intersect_marching(
-                    &ray,
-                    0.0,
-                    f64::INFINITY,
-                    &opts,
-                    &mut TraversalStats::default(),
-                )
-                .unwrap_or_else(|| panic!("ray {i} misses the plane"));
-            let p = ray.origin + ray.dir * hit.hit.t;
-            assert!((p.z - stored).abs() < 1e-3, "{p:?}");
-        }
+        crate::test_util::assert_slanted_rays_meet_height(stored, |ray| {
+            let mut stats = TraversalStats::default();
+            let hit = surface.intersect_marching(ray, 0.0, f64::INFINITY, &opts, &mut stats)?;
+            Some(hit.hit.t)
+        });
     }
 
     #[test]
     fn curved_marching_of_a_flat_prism_finds_the_compressed_height() {
         // Flat base, equal normals: the Coons patches are flat, only w' = w / 2 + 1 / 4 stays.
-        let surface = plane(0.4);
-        let stored = f64::from(surface.field().sample(0, 0)) / f64::from(crate::HEIGHT_ONE);
+        let (surface, stored) = crate::test_util::flat_map_square(0.4);
         let opts = MarchOptions::default();
-        for i in 0..50 {
-            let (x, y) = (0.1 + 0.015 * i as f64, 0.8 - 0.012 * i as f64);
-            let ray = Ray::new(DVec3::new(x, y, 2.0), DVec3::new(0.05, -0.1, -1.0)).unwrap();
+        crate::test_util::assert_slanted_rays_meet_height(stored / 2.0 + 0.25, |ray| {
             let mut stats = TraversalStats::default();
-            let hit = surface
-                .intersect_curved_marching(&ray, 0.0, f64::INFINITY, &opts, &mut stats)
-                .unwrap_or_else(|| panic!("ray {i} misses the plane"));
-            let p = ray.origin + ray.dir * hit.hit.t;
-            assert!((p.z - (stored / 2.0 + 0.25)).abs() < 1e-3, "{p:?}");
+            let hit =
+                surface.intersect_curved_marching(ray, 0.0, f64::INFINITY, &opts, &mut stats)?;
             assert!((hit.hit.h - stored).abs() < 2e-3, "{}", hit.hit.h);
             let n = surface.curved_normal(&hit, ray.dir).unwrap();
             assert!((n - DVec3::Z).length() < 1e-12, "{n}");
-        }
+            Some(hit.hit.t)
+        });
     }
 
     #[test]

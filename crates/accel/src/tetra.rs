@@ -204,9 +204,7 @@ impl<T: Real> DisplacedSurface<T> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{HeightField, Wrap};
     use alloc::vec;
-    use nlrt_poly::glam::DVec3;
 
     #[test]
     fn neighbours_split_their_shared_side_alike() {
@@ -236,26 +234,13 @@ mod tests {
 
     #[test]
     fn constant_normal_prisms_are_linear_so_a_flat_map_is_exact() {
-        let mesh = crate::test_util::unit_square(DVec3::Z, [[0, 1, 2], [0, 2, 3]]);
-        let field = HeightField::from_unit_heights(16, &[0.4; 256], Wrap::Clamp).unwrap();
-        let surface = DisplacedSurface::new(mesh, field, 1.0, 1.0).unwrap();
-        let stored = f64::from(surface.field().sample(0, 0)) / f64::from(crate::HEIGHT_ONE);
-        for i in 0..100 {
-            let (x, y) = (0.05 + 0.007 * i as f64, 0.9 - 0.008 * i as f64);
-            let ray = Ray::new(DVec3::new(x, y, 2.0), DVec3::new(0.1, 0.05, -1.0)).unwrap();
-            let hit = surface
-                .intersect_tetrahedra(
-                    &ray,
-                    0.0,
-                    f64::INFINITY,
-                    &MarchOptions::default(),
-                    &mut TraversalStats::default(),
-                )
-                .unwrap_or_else(|| panic!("ray {i} misses"));
-            let p = ray.origin + ray.dir * hit.hit.t;
-            // The binary search's resolution: 2^-10 of a sample step.
-            assert!((p.z - stored).abs() < 1e-3, "{p:?}");
-        }
+        let (surface, stored) = crate::test_util::flat_map_square(0.4);
+        let opts = MarchOptions::default();
+        crate::test_util::assert_slanted_rays_meet_height(stored, |ray| {
+            let mut stats = TraversalStats::default();
+            let hit = surface.intersect_tetrahedra(ray, 0.0, f64::INFINITY, &opts, &mut stats)?;
+            Some(hit.hit.t)
+        });
     }
 }
 
