@@ -5,7 +5,7 @@
 
 use alloc::vec::Vec;
 use nlrt_poly::{Real, Vector2, Vector3};
-use nlrt_shellmap::{NonlinearRay, Prism, Ray, intersect_box, intersect_prism};
+use nlrt_shellmap::{NonlinearRay, Prism, Ray, TextureCurve, intersect_box, intersect_prism};
 
 use crate::bvh::{Bvh4, SlabRay};
 use crate::displacement::{
@@ -264,6 +264,276 @@ pub(crate) fn traverse_cells<T: Real>(
             &mut stack,
             &mut depth,
             stats,
+        );
+    }
+}
+
+/// A stretch of a nonlinear ray's curve inside a node's uv square: the node, the heights
+/// `h` of the stretch (clipped to the node's height bounds) and its entry distance.
+#[derive(Clone, Copy)]
+struct Stretch<T> {
+    level: u32,
+    x: i32,
+    y: i32,
+    h: [T; 2],
+    t_in: T,
+}
+
+/// Stretches one node may hand to its children before the traversal gives up on stretches
+/// (see [`traverse_curve_cells`]): a stretch meets each of the two split lines at most twice
+/// (they are quadratics), so it falls into at most 5 pieces, each in one child; only a piece
+/// within rounding of a split line goes to both sides.
+const STRETCHES_PER_NODE: usize = 8;
+/// Stretches in the boxes of the (at most 4) roots: a quadratic curve meets the 4 faces of a
+/// square at most 8 times and the denominator's 2 zeros split it further.
+const ROOT_STRETCHES: usize = 24;
+const CURVE_STACK: usize = ROOT_STRETCHES + (STRETCHES_PER_NODE - 1) * MAX_ROOT_LEVEL;
+
+/// The implicit quadtree over the cells of one base triangle walked along the nonlinear ray's
+/// texture-space curve, nearest first (the BLAS traversal of Ogaki 2023, sec. 4.4, with one
+/// box test per root instead of one per node).
+///
+/// The roots' boxes (cells `[x 2^l, (x + 1) 2^l)`, heights from `node_heights(level, x, y)`)
+/// give the stretches of the curve inside them, by heights ([`TextureCurve::box_pieces`]).
+/// A node's stretch is cut where the curve crosses the node's two split lines (the roots of
+/// two quadratics on the stretch's height interval, [`TextureCurve::crossings`]), each piece
+/// lies in one child, found from its midpoint, and goes there with its heights clipped to the
+/// child's height bounds: a child whose bounds miss the piece's heights cannot hold a hit
+/// there. Two quadratics per node replace the four box tests of the children (each up to
+/// five quadratics). Rounding is covered as in the box test: a piece's ends at a crossing
+/// are widened by the crossing's error window, and a piece whose midpoint is within the
+/// rounding bound of a split line goes to both sides (a curve running along a texel edge).
+/// Cells whose square misses the triangle's uv triangle `uv_tri` (in cell units) are
+/// skipped; pieces entered beyond the current `t_max` are skipped; `leaf(x, y, t_max,
+/// stats)` tests a cell and returns the distance of a hit nearer than `t_max`.
+///
+/// Returns `false` when a node produced more pieces than the fixed stack holds (only
+/// possible for curves running within rounding of many split lines at once): the caller then
+/// finishes the triangle with [`traverse_cells`], whose answer does not depend on what the
+/// leaves saw so far.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn traverse_curve_cells<T: Real>(
+    root: RootNodes,
+    curve: &TextureCurve<'_, T>,
+    cell_size: T,
+    uv_tri: [[T; 2]; 3],
+    t_min: T,
+    t_max: &mut T,
+    stats: &mut TraversalStats,
+    node_heights: impl Fn(u32, i32, i32) -> [T; 2],
+    mut leaf: impl FnMut(i32, i32, T, &mut TraversalStats) -> Option<T>,
+) -> bool {
+    let empty = Stretch {
+        level: 0,
+        x: 0,
+        y: 0,
+        h: [T::ZERO; 2],
+        t_in: T::ZERO,
+    };
+    let mut stack = [empty; CURVE_STACK];
+    let mut depth = 0;
+    let cell = |c: i64| T::from_f64(c as f64) * cell_size;
+    // Whether node (level, x, y) is in the root's texel range and may meet the uv triangle.
+    let wanted = |level: u32, x: i32, y: i32| {
+        let k = 1i64 << level;
+        let (cx0, cy0) = (i64::from(x) * k, i64::from(y) * k);
+        let [r0, r1, r2, r3] = root.texels.map(i64::from);
+        if cx0 > r2 || cy0 > r3 || cx0 + k <= r0 || cy0 + k <= r1 {
+            return false;
+        }
+        let lo = [T::from_f64(cx0 as f64), T::from_f64(cy0 as f64)];
+        let hi = [T::from_f64((cx0 + k) as f64), T::from_f64((cy0 + k) as f64)];
+        square_meets_triangle(lo, hi, &uv_tri)
+    };
+    // Sorted insertion by entry distance (few entries).
+    let insert = |found: &mut [Stretch<T>], n: &mut usize, s: Stretch<T>| -> bool {
+        if *n == found.len() {
+            return false;
+        }
+        let mut i = *n;
+        while i > 0 && found[i - 1].t_in > s.t_in {
+            found[i] = found[i - 1];
+            i -= 1;
+        }
+        found[i] = s;
+        *n += 1;
+        true
+    };
+    {
+        let mut found = [empty; ROOT_STRETCHES];
+        let mut n = 0;
+        let mut complete = true;
+        for j in 0..i32::from(root.ny) {
+            for i in 0..i32::from(root.nx) {
+                let (x, y) = (root.x + i, root.y + j);
+                if !wanted(root.level, x, y) {
+                    continue;
+                }
+                stats.box_tests += 1;
+                let k = 1i64 << root.level;
+                let (cx0, cy0) = (i64::from(x) * k, i64::from(y) * k);
+                let [h_lo, h_hi] = node_heights(root.level, x, y);
+                let lo = [cell(cx0), cell(cy0), h_lo];
+                let hi = [cell(cx0 + k), cell(cy0 + k), h_hi];
+                curve.box_pieces(lo, hi, t_min, *t_max, |p| {
+                    let s = Stretch {
+                        level: root.level,
+                        x,
+                        y,
+                        h: [p.h_in, p.h_out],
+                        t_in: p.t_in,
+                    };
+                    complete &= insert(&mut found, &mut n, s);
+                });
+            }
+        }
+        if !complete {
+            return false;
+        }
+        for s in found[..n].iter().rev() {
+            stack[depth] = *s;
+            depth += 1;
+        }
+    }
+    while depth > 0 {
+        depth -= 1;
+        let node = stack[depth];
+        if node.t_in > *t_max {
+            continue;
+        }
+        if node.level == 0 {
+            if let Some(t) = leaf(node.x, node.y, *t_max, stats) {
+                *t_max = t;
+            }
+            continue;
+        }
+        let level = node.level - 1;
+        let (x, y) = (node.x * 2, node.y * 2);
+        let half = 1i64 << level;
+        let split = [cell(i64::from(x + 1) * half), cell(i64::from(y + 1) * half)];
+        let [a, b] = node.h;
+        // The stretch's ends and its crossings of the split lines, each with its window.
+        let mut cuts = [(a, T::ZERO); 6];
+        let mut m = 1;
+        for axis in 0..2 {
+            let (roots, k) = curve.crossings(axis, split[axis], a, b);
+            for &r in &roots[..k] {
+                cuts[m] = r;
+                m += 1;
+            }
+        }
+        cuts[m] = (b, T::ZERO);
+        m += 1;
+        let cuts = &mut cuts[..m];
+        cuts.sort_unstable_by(|p, q| p.0.partial_cmp(&q.0).unwrap_or(core::cmp::Ordering::Equal));
+        let mut found = [empty; STRETCHES_PER_NODE];
+        let mut n = 0;
+        for i in 0..m - 1 {
+            let ((c0, w0), (c1, w1)) = (cuts[i], cuts[i + 1]);
+            // Zero-length pieces lie on a cut; a stretch that is one point is one piece.
+            if !(c1 > c0 || (a == b && i == 0)) {
+                continue;
+            }
+            let mid = (c0 + c1) * T::HALF;
+            // Children on each axis: [first, last] of {0, 1}.
+            let sides = match curve.uv_with_error(mid) {
+                Some((uv, e)) => [0, 1].map(|k| {
+                    [
+                        u8::from(uv[k] > split[k] + e[k]),
+                        u8::from(uv[k] >= split[k] - e[k]),
+                    ]
+                }),
+                None => [[0, 1]; 2],
+            };
+            let (lo_h, hi_h) = ((c0 - w0).max(a), (c1 + w1).min(b));
+            for qy in sides[1][0]..=sides[1][1] {
+                for qx in sides[0][0]..=sides[0][1] {
+                    let (cx, cy) = (x + i32::from(qx), y + i32::from(qy));
+                    if !wanted(level, cx, cy) {
+                        continue;
+                    }
+                    stats.box_tests += 1;
+                    let [lo, hi] = node_heights(level, cx, cy);
+                    let (h0, h1) = (lo_h.max(lo), hi_h.min(hi));
+                    if !(h0 <= h1) {
+                        continue;
+                    }
+                    // Distances at the clipped ends (the piece's distances lie between them
+                    // where the shell does not fold, as in the box test).
+                    let t_in = match (curve.distance(h0), curve.distance(h1)) {
+                        (Some(ta), Some(tb)) => {
+                            if ta.max(tb) < t_min || ta.min(tb) > *t_max {
+                                continue;
+                            }
+                            ta.min(tb).max(t_min)
+                        }
+                        _ => t_min,
+                    };
+                    let s = Stretch {
+                        level,
+                        x: cx,
+                        y: cy,
+                        h: [h0, h1],
+                        t_in,
+                    };
+                    if !insert(&mut found, &mut n, s) {
+                        return false;
+                    }
+                }
+            }
+        }
+        if depth + n > CURVE_STACK {
+            return false;
+        }
+        for s in found[..n].iter().rev() {
+            stack[depth] = *s;
+            depth += 1;
+        }
+    }
+    true
+}
+
+/// The nonlinear BLAS walk of one base triangle shared by displacement and shell mapping:
+/// [`traverse_curve_cells`], finished by the box-test traversal [`traverse_cells`] in the
+/// rare case it gives up. `node_heights(level, x, y)` bounds the heights of a node's
+/// content; `leaf` as in [`traverse_cells`].
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn walk_cells<T: Real>(
+    root: RootNodes,
+    prism: &Prism<T>,
+    ray: &NonlinearRay<T>,
+    cell_size: T,
+    t_min: T,
+    t_max: T,
+    stats: &mut TraversalStats,
+    node_heights: impl Fn(u32, i32, i32) -> [T; 2],
+    mut leaf: impl FnMut(i32, i32, T, &mut TraversalStats) -> Option<T>,
+) {
+    let uv_tri = uv_in_cells(prism, cell_size);
+    let curve = TextureCurve::new(prism, ray);
+    let mut t = t_max;
+    let complete = traverse_curve_cells(
+        root,
+        &curve,
+        cell_size,
+        uv_tri,
+        t_min,
+        &mut t,
+        stats,
+        &node_heights,
+        &mut leaf,
+    );
+    if !complete {
+        traverse_cells(
+            root,
+            uv_tri,
+            t,
+            stats,
+            |level, x, y, t_max| {
+                let h = node_heights(level, x, y);
+                texture_box_entry(prism, ray, cell_size, (level, x, y), h, t_min, t_max)
+            },
+            leaf,
         );
     }
 }

@@ -7,9 +7,7 @@ use nlrt_poly::{horner_with_bound_scaled, solve_cubic_in, solve_quadratic_in};
 use nlrt_shellmap::{Hit, NonlinearRay, Prism, Ray, TexturePlane, alpha_beta_eq11, world_normal};
 
 use crate::bvh::{Aabb, Bvh4};
-use crate::cells::{
-    PrismTlas, SetupError, facing_unit, texture_box_entry, traverse_cells, uv_in_cells,
-};
+use crate::cells::{PrismTlas, SetupError, facing_unit, walk_cells};
 use crate::heightfield::{HEIGHT_ONE, HeightField};
 use crate::mesh::BaseMesh;
 
@@ -496,15 +494,17 @@ impl<T: Real> DisplacedSurface<T> {
         stats: &mut TraversalStats,
     ) -> Option<SurfaceHit<T>> {
         let mut best = None;
-        traverse_cells(
+        walk_cells(
             self.prisms.roots(tri),
-            uv_in_cells(prism, self.texel_size),
+            prism,
+            ray,
+            self.texel_size,
+            t_min,
             t_max,
             stats,
-            |level, x, y, t_max| {
+            |level, x, y| {
                 let [lo, hi] = self.field.texel_bounds(level, i64::from(x), i64::from(y));
-                let h = [Self::height(lo), Self::height(hi)];
-                texture_box_entry(prism, ray, self.texel_size, (level, x, y), h, t_min, t_max)
+                [Self::height(lo), Self::height(hi)]
             },
             |x, y, t_max, stats| {
                 stats.texel_tests += 1;

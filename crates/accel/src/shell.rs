@@ -13,9 +13,7 @@ use nlrt_shellmap::{
 };
 
 use crate::bvh::{Aabb, Bvh4};
-use crate::cells::{
-    PrismTlas, SetupError, facing_unit, texture_box_entry, traverse_cells, uv_in_cells,
-};
+use crate::cells::{PrismTlas, SetupError, facing_unit, walk_cells};
 use crate::displacement::{MAX_TEXEL_COORDINATE, RootNodes, TraversalStats};
 use crate::mesh::BaseMesh;
 
@@ -308,15 +306,15 @@ impl<T: Real> ShellSurface<T> {
     ) -> Option<ShellHit<T>> {
         let [h_lo, h_hi] = self.object.h_range;
         let mut best = None;
-        traverse_cells(
+        walk_cells(
             self.prisms.roots(tri),
-            uv_in_cells(prism, T::ONE),
+            prism,
+            ray,
+            T::ONE,
+            t_min,
             t_max,
             stats,
-            |level, x, y, t_max| {
-                let h = [h_lo, h_hi];
-                texture_box_entry(prism, ray, T::ONE, (level, x, y), h, t_min, t_max)
-            },
+            |_, _, _| [h_lo, h_hi],
             |x, y, t_max, stats| {
                 let mut t = t_max;
                 self.intersect_tile(tri, prism, ray, x, y, t_min, &mut t, &mut best, stats);

@@ -23,6 +23,286 @@ pub struct BoxSpan<T> {
 /// two for the denominator's zeros.
 const MAX_CANDIDATES: usize = 12;
 
+/// A nonlinear ray's texture-space curve `h -> (u(h), v(h))` with bounds on the rounding
+/// errors of evaluating it, for the accelerators that walk it through a grid of cells: the
+/// box test ([`TextureCurve::box_pieces`]), the crossings of grid lines
+/// ([`TextureCurve::crossings`]) and the side of a line a stretch of the curve is on
+/// ([`TextureCurve::uv_with_error`]). Built once per ray and prism.
+#[derive(Clone, Copy, Debug)]
+pub struct TextureCurve<'a, T: Real> {
+    prism: &'a Prism<T>,
+    ray: &'a NonlinearRay<T>,
+    /// `U`, `V` and `D` with every term's magnitude: the error bounds' polynomials.
+    mu: [T; 3],
+    mv: [T; 3],
+    md: [T; 3],
+    gamma8: T,
+}
+
+impl<'a, T: Real> TextureCurve<'a, T> {
+    /// The curve of `ray` in `prism`.
+    #[must_use]
+    pub fn new(prism: &'a Prism<T>, ray: &'a NonlinearRay<T>) -> Self {
+        let [t0, t1, t2] = prism.uv;
+        let (du1, du2) = ((t1.x() - t0.x()).abs(), (t2.x() - t0.x()).abs());
+        let (dv1, dv2) = ((t1.y() - t0.y()).abs(), (t2.y() - t0.y()).abs());
+        let magnitude = |i: usize, base: T, e1: T, e2: T| {
+            ray.d[i].abs().mul_add(
+                base.abs(),
+                ray.alpha[i].abs().mul_add(e1, ray.beta[i].abs() * e2),
+            )
+        };
+        // The coefficients of U, V and D are sums of three products of accurately computed
+        // terms; they and their evaluation err by less than gamma(8) times the same
+        // polynomials with absolute-valued terms.
+        let eight_u = T::from_i32(8) * T::UNIT_ROUNDOFF;
+        Self {
+            prism,
+            ray,
+            mu: core::array::from_fn(|i| magnitude(i, t0.x(), du1, du2)),
+            mv: core::array::from_fn(|i| magnitude(i, t0.y(), dv1, dv2)),
+            md: core::array::from_fn(|i| ray.d[i].abs()),
+            gamma8: eight_u / (T::ONE - eight_u),
+        }
+    }
+
+    /// The nonlinear ray.
+    #[must_use]
+    pub fn ray(&self) -> &NonlinearRay<T> {
+        self.ray
+    }
+
+    /// `(u(h), v(h))` and bounds on their rounding errors; `None` where the denominator is 0.
+    #[must_use]
+    #[inline]
+    pub fn uv_with_error(&self, h: T) -> Option<([T; 2], [T; 2])> {
+        let ray = self.ray;
+        let d = quadratic(&ray.d, h);
+        if d == T::ZERO {
+            return None;
+        }
+        let (u, v) = (quadratic(&ray.u, h) / d, quadratic(&ray.v, h) / d);
+        let a = h.abs();
+        let (d_abs, inv) = (quadratic(&self.md, a), self.gamma8 / d.abs());
+        let eu = (quadratic(&self.mu, a) + u.abs() * d_abs) * inv;
+        let ev = (quadratic(&self.mv, a) + v.abs() * d_abs) * inv;
+        Some(([u, v], [eu, ev]))
+    }
+
+    /// The distance along the world ray at height `h`; `None` where the denominator is 0.
+    #[must_use]
+    #[inline]
+    pub fn distance(&self, h: T) -> Option<T> {
+        self.ray
+            .alpha_beta(h)
+            .map(|(alpha, beta)| self.ray.signed_distance(self.prism, alpha, beta, h))
+    }
+
+    /// Heights in `[a, b]` where the curve crosses the line `u = c` (`axis` 0) or `v = c`
+    /// (`axis` 1), increasing, each with the half-width of a window around it that holds the
+    /// crossing of the exact curve: the rounding bound of `U - c D` at the root (as in
+    /// [`TextureCurve::uv_with_error`]) over its slope there, doubled for the second-order
+    /// term and the solver's last-bit error; infinite where the slope is 0 (a tangency, or a
+    /// curve running along the line).
+    #[must_use]
+    #[inline]
+    pub fn crossings(&self, axis: usize, c: T, a: T, b: T) -> ([(T, T); 2], usize) {
+        let (num, mag) = if axis == 0 {
+            (&self.ray.u, &self.mu)
+        } else {
+            (&self.ray.v, &self.mv)
+        };
+        let d = &self.ray.d;
+        let q: [T; 3] = core::array::from_fn(|i| (-c).mul_add(d[i], num[i]));
+        let roots = solve_quadratic_in(q, a, b);
+        let mut out = [(T::ZERO, T::ZERO); 2];
+        let mut n = 0;
+        for &r in roots.iter() {
+            let x = r.abs();
+            let err = self.gamma8 * c.abs().mul_add(quadratic(&self.md, x), quadratic(mag, x));
+            let slope = (T::TWO * q[2]).mul_add(r, q[1]).abs();
+            let w = if slope > T::ZERO {
+                T::TWO * (err / slope + x * T::UNIT_ROUNDOFF)
+            } else {
+                T::INFINITY
+            };
+            out[n] = (r, w);
+            n += 1;
+        }
+        (out, n)
+    }
+
+    /// Calls `piece` for each stretch of the curve inside the texture-space box `lo..=hi`
+    /// (each `(u, v, h)`) whose distances along the world ray meet `[t_min, t_max]`: its
+    /// heights `h_in..=h_out` and distances `t_in..=t_out` (clamped to `[t_min, t_max]`).
+    /// A curve only touching the box gives a piece with `h_in == h_out`. See
+    /// [`intersect_box`] for how inside-ness is decided.
+    pub fn box_pieces(
+        &self,
+        lo: [T; 3],
+        hi: [T; 3],
+        t_min: T,
+        t_max: T,
+        mut piece: impl FnMut(BoxSpan<T>),
+    ) {
+        let (h_lo, h_hi) = (lo[2], hi[2]);
+        if !(h_lo <= h_hi && lo[0] <= hi[0] && lo[1] <= hi[1]) {
+            return;
+        }
+        let ray = self.ray;
+        let gamma8 = self.gamma8;
+        let eight_u = T::from_i32(8) * T::UNIT_ROUNDOFF;
+        // Early rejection by interval arithmetic: the ranges of U, V and D over [h_lo, h_hi]
+        // (ends and vertex of each quadratic), then u = U / D and v = V / D by interval
+        // division where D keeps one sign, widened by the same rounding bound as the exact
+        // test below. Sound (never rejects what the exact test keeps) and cheap; most boxes
+        // of a traversal are rejected here without solving a quadratic.
+        let range = |c: &[T; 3]| {
+            let at = |h: T| quadratic(c, h);
+            let (mut lo_q, mut hi_q) = (at(h_lo).min(at(h_hi)), at(h_lo).max(at(h_hi)));
+            if c[2] != T::ZERO {
+                let vertex = -c[1] / (T::TWO * c[2]);
+                if vertex > h_lo && vertex < h_hi {
+                    lo_q = lo_q.min(at(vertex));
+                    hi_q = hi_q.max(at(vertex));
+                }
+            }
+            (lo_q, hi_q)
+        };
+        let (d_lo, d_hi) = range(&ray.d);
+        let h_abs = h_lo.abs().max(h_hi.abs());
+        let d_err = gamma8 * quadratic(&self.md, h_abs);
+        if d_lo - d_err > T::ZERO || d_hi + d_err < T::ZERO {
+            let (d_min, d_max) = if d_lo > T::ZERO {
+                (d_lo - d_err, d_hi + d_err)
+            } else {
+                (-(d_hi + d_err), -(d_lo - d_err))
+            };
+            let sign = if d_lo > T::ZERO { T::ONE } else { -T::ONE };
+            let quotient = |c: &[T; 3], m: &[T; 3]| {
+                let (q_lo, q_hi) = range(c);
+                let err = gamma8 * quadratic(m, h_abs);
+                let (q_lo, q_hi) = if sign > T::ZERO {
+                    (q_lo - err, q_hi + err)
+                } else {
+                    (-(q_hi + err), -(q_lo - err))
+                };
+                // q / d for q in [q_lo, q_hi], d in [d_min, d_max] with d_min > 0.
+                let lo_r = if q_lo >= T::ZERO {
+                    q_lo / d_max
+                } else {
+                    q_lo / d_min
+                };
+                let hi_r = if q_hi >= T::ZERO {
+                    q_hi / d_min
+                } else {
+                    q_hi / d_max
+                };
+                // One more relative rounding of the divisions.
+                (lo_r - lo_r.abs() * eight_u, hi_r + hi_r.abs() * eight_u)
+            };
+            let (u_lo, u_hi) = quotient(&ray.u, &self.mu);
+            let (v_lo, v_hi) = quotient(&ray.v, &self.mv);
+            if u_hi < lo[0] || u_lo > hi[0] || v_hi < lo[1] || v_lo > hi[1] {
+                return;
+            }
+        }
+        let mut candidates = [T::ZERO; MAX_CANDIDATES];
+        let mut n = 0;
+        let mut push = |h: T| {
+            candidates[n] = h;
+            n += 1;
+        };
+        push(h_lo);
+        push(h_hi);
+        let d = &ray.d;
+        let faces = [
+            (&ray.u, lo[0]),
+            (&ray.u, hi[0]),
+            (&ray.v, lo[1]),
+            (&ray.v, hi[1]),
+        ];
+        for (num, face) in faces {
+            let q = core::array::from_fn(|i| (-face).mul_add(d[i], num[i]));
+            for &h in solve_quadratic_in(q, h_lo, h_hi).iter() {
+                push(h);
+            }
+        }
+        let poles = solve_quadratic_in(*d, h_lo, h_hi);
+        for &h in poles.iter() {
+            push(h);
+        }
+        let candidates = &mut candidates[..n];
+        candidates.sort_unstable_by(|a, b| a.partial_cmp(b).unwrap_or(core::cmp::Ordering::Equal));
+
+        // At a pole the ray runs parallel to the prism's cross-section: that height is kept
+        // as inside with the whole distance range (conservative).
+        for &h in poles.iter() {
+            piece(BoxSpan {
+                h_in: h,
+                h_out: h,
+                t_in: t_min,
+                t_out: t_max,
+            });
+        }
+        // Inside-ness is judged with the faces moved out by the rounding bounds of u(h) and
+        // v(h). Without it, a curve running along a face (a base triangle degenerate in uv
+        // onto a texel edge) is put on either side of the face by rounding, and a box whose
+        // microtriangles the curve hits is culled.
+        let inside = |h: T| {
+            self.uv_with_error(h).is_some_and(|([u, v], [eu, ev])| {
+                u >= lo[0] - eu && u <= hi[0] + eu && v >= lo[1] - ev && v <= hi[1] + ev
+            })
+        };
+        // Between consecutive candidates inside-ness cannot change, so the midpoint decides a
+        // whole piece, ends included (they lie on faces, where rounding alone could put them
+        // out). Off the poles the distance t(h) is continuous and, where the shell does not
+        // fold over itself, monotonic on a piece (a point of the ray has one height), so the
+        // piece's distances lie between those of its ends.
+        let mut previous_inside = false;
+        for i in 0..candidates.len() {
+            let c = candidates[i];
+            let piece_inside = i + 1 < candidates.len() && {
+                let next = candidates[i + 1];
+                next > c && inside((c + next) * T::HALF)
+            };
+            if piece_inside {
+                let next = candidates[i + 1];
+                if let (Some(ta), Some(tb)) = (self.distance(c), self.distance(next)) {
+                    let (lo_t, hi_t) = (ta.min(tb).max(t_min), ta.max(tb).min(t_max));
+                    if lo_t <= hi_t {
+                        // The heights at the clamped distances are not needed: the piece's
+                        // full height range is kept (conservative).
+                        piece(BoxSpan {
+                            h_in: c,
+                            h_out: next,
+                            t_in: lo_t,
+                            t_out: hi_t,
+                        });
+                    }
+                }
+            } else if !previous_inside
+                && inside(c)
+                && let Some(t) = self.distance(c).filter(|&t| t >= t_min && t <= t_max)
+            {
+                // An isolated inside point: the curve touches the box at a face or edge.
+                piece(BoxSpan {
+                    h_in: c,
+                    h_out: c,
+                    t_in: t,
+                    t_out: t,
+                });
+            }
+            previous_inside = piece_inside;
+        }
+    }
+}
+
+#[inline]
+fn quadratic<T: Real>(c: &[T; 3], h: T) -> T {
+    c[2].mul_add(h, c[1]).mul_add(h, c[0])
+}
+
 /// Where `ray` is inside the texture-space box `lo..=hi` (each `(u, v, h)`), with the distance
 /// along the world ray in `[t_min, t_max]`; `None` when it never is.
 ///
@@ -34,7 +314,8 @@ const MAX_CANDIDATES: usize = 12;
 /// is constant over a stretch of the ray): that height is kept as inside with the whole
 /// `[t_min, t_max]`, which is conservative. `t_in`/`t_out` come from the ends of the inside
 /// pieces, clamped to `[t_min, t_max]`: exact where the shell does not fold over itself
-/// (then the distance is monotonic along a piece), a sample otherwise.
+/// (then the distance is monotonic along a piece), a sample otherwise. The span is the hull
+/// of [`TextureCurve::box_pieces`].
 #[must_use]
 pub fn intersect_box<T: Real>(
     prism: &Prism<T>,
@@ -44,185 +325,13 @@ pub fn intersect_box<T: Real>(
     t_min: T,
     t_max: T,
 ) -> Option<BoxSpan<T>> {
-    let (h_lo, h_hi) = (lo[2], hi[2]);
-    if !(h_lo <= h_hi && lo[0] <= hi[0] && lo[1] <= hi[1]) {
-        return None;
-    }
-    let [t0, t1, t2] = prism.uv;
-    let (du1, du2) = ((t1.x() - t0.x()).abs(), (t2.x() - t0.x()).abs());
-    let (dv1, dv2) = ((t1.y() - t0.y()).abs(), (t2.y() - t0.y()).abs());
-    let magnitude = |i: usize, base: T, e1: T, e2: T| {
-        ray.d[i].abs().mul_add(
-            base.abs(),
-            ray.alpha[i].abs().mul_add(e1, ray.beta[i].abs() * e2),
-        )
-    };
-    let mu: [T; 3] = core::array::from_fn(|i| magnitude(i, t0.x(), du1, du2));
-    let mv: [T; 3] = core::array::from_fn(|i| magnitude(i, t0.y(), dv1, dv2));
-    let md: [T; 3] = core::array::from_fn(|i| ray.d[i].abs());
-    let eight_u = T::from_i32(8) * T::UNIT_ROUNDOFF;
-    let gamma8 = eight_u / (T::ONE - eight_u);
-    let abs_at = |c: &[T; 3], h: T| c[2].mul_add(h, c[1]).mul_add(h, c[0]);
-    // Early rejection by interval arithmetic: the ranges of U, V and D over [h_lo, h_hi]
-    // (ends and vertex of each quadratic), then u = U / D and v = V / D by interval division
-    // where D keeps one sign, widened by the same rounding bound as the exact test below.
-    // Sound (never rejects what the exact test keeps) and cheap; most boxes of a traversal
-    // are rejected here without solving a quadratic.
-    let range = |c: &[T; 3]| {
-        let at = |h: T| c[2].mul_add(h, c[1]).mul_add(h, c[0]);
-        let (mut lo_q, mut hi_q) = (at(h_lo).min(at(h_hi)), at(h_lo).max(at(h_hi)));
-        if c[2] != T::ZERO {
-            let vertex = -c[1] / (T::TWO * c[2]);
-            if vertex > h_lo && vertex < h_hi {
-                lo_q = lo_q.min(at(vertex));
-                hi_q = hi_q.max(at(vertex));
-            }
-        }
-        (lo_q, hi_q)
-    };
-    let (d_lo, d_hi) = range(&ray.d);
-    let h_abs = h_lo.abs().max(h_hi.abs());
-    let d_err = gamma8 * abs_at(&md, h_abs);
-    if d_lo - d_err > T::ZERO || d_hi + d_err < T::ZERO {
-        let (d_min, d_max) = if d_lo > T::ZERO {
-            (d_lo - d_err, d_hi + d_err)
-        } else {
-            (-(d_hi + d_err), -(d_lo - d_err))
-        };
-        let sign = if d_lo > T::ZERO { T::ONE } else { -T::ONE };
-        let quotient = |c: &[T; 3], m: &[T; 3]| {
-            let (q_lo, q_hi) = range(c);
-            let err = gamma8 * abs_at(m, h_abs);
-            let (q_lo, q_hi) = if sign > T::ZERO {
-                (q_lo - err, q_hi + err)
-            } else {
-                (-(q_hi + err), -(q_lo - err))
-            };
-            // q / d for q in [q_lo, q_hi], d in [d_min, d_max] with d_min > 0.
-            let lo_r = if q_lo >= T::ZERO {
-                q_lo / d_max
-            } else {
-                q_lo / d_min
-            };
-            let hi_r = if q_hi >= T::ZERO {
-                q_hi / d_min
-            } else {
-                q_hi / d_max
-            };
-            // One more relative rounding of the divisions.
-            (lo_r - lo_r.abs() * eight_u, hi_r + hi_r.abs() * eight_u)
-        };
-        let (u_lo, u_hi) = quotient(&ray.u, &mu);
-        let (v_lo, v_hi) = quotient(&ray.v, &mv);
-        if u_hi < lo[0] || u_lo > hi[0] || v_hi < lo[1] || v_lo > hi[1] {
-            return None;
-        }
-    }
-    let mut candidates = [T::ZERO; MAX_CANDIDATES];
-    let mut n = 0;
-    let mut push = |h: T| {
-        candidates[n] = h;
-        n += 1;
-    };
-    push(h_lo);
-    push(h_hi);
-    let d = &ray.d;
-    let faces = [
-        (&ray.u, lo[0]),
-        (&ray.u, hi[0]),
-        (&ray.v, lo[1]),
-        (&ray.v, hi[1]),
-    ];
-    for (num, face) in faces {
-        let q = [
-            (-face).mul_add(d[0], num[0]),
-            (-face).mul_add(d[1], num[1]),
-            (-face).mul_add(d[2], num[2]),
-        ];
-        for &h in solve_quadratic_in(q, h_lo, h_hi).iter() {
-            push(h);
-        }
-    }
-    let poles = solve_quadratic_in(*d, h_lo, h_hi);
-    for &h in poles.iter() {
-        push(h);
-    }
-    let candidates = &mut candidates[..n];
-    candidates.sort_unstable_by(|a, b| a.partial_cmp(b).unwrap_or(core::cmp::Ordering::Equal));
-
     let mut span: Option<BoxSpan<T>> = None;
-    let mut include = |h: T, t_lo: T, t_hi: T| {
-        let s = span.get_or_insert(BoxSpan {
-            h_in: h,
-            h_out: h,
-            t_in: t_lo,
-            t_out: t_hi,
-        });
-        s.h_in = s.h_in.min(h);
-        s.h_out = s.h_out.max(h);
-        s.t_in = s.t_in.min(t_lo);
-        s.t_out = s.t_out.max(t_hi);
-    };
-    for &h in poles.iter() {
-        include(h, t_min, t_max);
-    }
-    // The distance along the ray at height h, when the curve is defined there.
-    let distance = |h: T| {
-        ray.alpha_beta(h)
-            .map(|(alpha, beta)| ray.signed_distance(prism, alpha, beta, h))
-    };
-    // Inside-ness is judged with the faces moved out by a bound on the rounding error of
-    // u(h) and v(h): the error of each coefficient of U, V and D (sums of three products of
-    // accurately computed terms) and of evaluating them, both below gamma(8) times the same
-    // polynomials with absolute-valued terms. Without it, a curve running along a face (a
-    // base triangle degenerate in uv onto a texel edge) is put on either side of the face by
-    // rounding, and a box whose microtriangles the curve hits is culled.
-    let inside = |h: T| {
-        let a = h.abs();
-        let d = d[2].mul_add(h, d[1]).mul_add(h, d[0]);
-        if d == T::ZERO {
-            return false;
-        }
-        let (u, v) = (
-            ray.u[2].mul_add(h, ray.u[1]).mul_add(h, ray.u[0]) / d,
-            ray.v[2].mul_add(h, ray.v[1]).mul_add(h, ray.v[0]) / d,
-        );
-        let (d_abs, inv) = (abs_at(&md, a), gamma8 / d.abs());
-        let eu = (abs_at(&mu, a) + u.abs() * d_abs) * inv;
-        let ev = (abs_at(&mv, a) + v.abs() * d_abs) * inv;
-        u >= lo[0] - eu && u <= hi[0] + eu && v >= lo[1] - ev && v <= hi[1] + ev
-    };
-    // Between consecutive candidates inside-ness cannot change, so the midpoint decides a
-    // whole piece, ends included (they lie on faces, where rounding alone could put them
-    // out). Off the poles the distance t(h) is continuous and, where the shell does not fold
-    // over itself, monotonic on a piece (a point of the ray has one height), so the piece's
-    // distances lie between those of its ends.
-    let mut previous_inside = false;
-    for i in 0..candidates.len() {
-        let c = candidates[i];
-        let piece_inside = i + 1 < candidates.len() && {
-            let next = candidates[i + 1];
-            next > c && inside((c + next) * T::HALF)
-        };
-        if piece_inside {
-            let next = candidates[i + 1];
-            if let (Some(ta), Some(tb)) = (distance(c), distance(next)) {
-                let (lo_t, hi_t) = (ta.min(tb).max(t_min), ta.max(tb).min(t_max));
-                if lo_t <= hi_t {
-                    // The heights at the clamped distances are not needed: the piece's full
-                    // height range is kept (conservative).
-                    include(c, lo_t, hi_t);
-                    include(next, lo_t, hi_t);
-                }
-            }
-        } else if !previous_inside
-            && inside(c)
-            && let Some(t) = distance(c).filter(|&t| t >= t_min && t <= t_max)
-        {
-            // An isolated inside point: the curve touches the box at a face or edge.
-            include(c, t, t);
-        }
-        previous_inside = piece_inside;
-    }
+    TextureCurve::new(prism, ray).box_pieces(lo, hi, t_min, t_max, |p| {
+        let s = span.get_or_insert(p);
+        s.h_in = s.h_in.min(p.h_in);
+        s.h_out = s.h_out.max(p.h_out);
+        s.t_in = s.t_in.min(p.t_in);
+        s.t_out = s.t_out.max(p.t_out);
+    });
     span
 }

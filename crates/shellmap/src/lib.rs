@@ -36,7 +36,7 @@ mod prism;
 mod prism_hit;
 mod ray;
 
-pub use aabb::{BoxSpan, intersect_box};
+pub use aabb::{BoxSpan, TextureCurve, intersect_box};
 pub use curved::coons_displacement;
 pub use microtriangle::{
     Hit, TexturePlane, alpha_beta_eq11, inside_triangle, intersect_flat_microtriangle,
