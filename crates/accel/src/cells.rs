@@ -415,8 +415,8 @@ pub(crate) fn traverse_curve_cells<T: Real>(
         // The stretch's ends and its crossings of the split lines, each with its window.
         let mut cuts = [(a, T::ZERO); 6];
         let mut m = 1;
-        for axis in 0..2 {
-            let (roots, k) = curve.crossings(axis, split[axis], a, b);
+        for (axis, &line) in split.iter().enumerate() {
+            let (roots, k) = curve.crossings(axis, line, a, b);
             for &r in &roots[..k] {
                 cuts[m] = r;
                 m += 1;
