@@ -5,7 +5,7 @@
 
 use alloc::vec::Vec;
 use nlrt_poly::{Real, Vector2, Vector3};
-use nlrt_shellmap::{NonlinearRay, Prism, Ray, TextureCurve, intersect_box, intersect_prism};
+use nlrt_shellmap::{BaseEdges, NonlinearRay, Prism, Ray, TextureCurve, intersect_box};
 
 use crate::bvh::{Bvh4, SlabRay};
 use crate::displacement::{
@@ -115,8 +115,8 @@ impl<T: Real> PrismTlas<T> {
         best
     }
 
-    /// [`PrismTlas::traverse`] with the exact ray-prism test as a gate, then `blas(triangle,
-    /// prism, nonlinear ray, t_max)`.
+    /// [`PrismTlas::traverse`], then `blas(triangle, prism, nonlinear ray, t_max)` (which
+    /// finds where the ray is inside the prism itself: [`walk_cells`]).
     pub(crate) fn intersect<H>(
         &self,
         ray: &Ray<T>,
@@ -133,7 +133,6 @@ impl<T: Real> PrismTlas<T> {
     ) -> Option<H> {
         self.traverse(ray, t_min, t_max, |tri, prism, t_max| {
             stats.prism_tests += 1;
-            intersect_prism(prism, ray, t_min, t_max)?;
             let nl = NonlinearRay::new(prism, ray);
             blas(tri, prism, &nl, t_max, stats)
         })
@@ -269,14 +268,28 @@ pub(crate) fn traverse_cells<T: Real>(
 }
 
 /// A stretch of a nonlinear ray's curve inside a node's uv square: the node, the heights
-/// `h` of the stretch (clipped to the node's height bounds) and its entry distance.
+/// `h` of the stretch (clipped to the node's height bounds), the direction in which the
+/// distance along the ray grows with the height, and whether its distances must be checked
+/// against `t_min` (its root stretch began before it).
 #[derive(Clone, Copy)]
 struct Stretch<T> {
     level: u32,
     x: i32,
     y: i32,
     h: [T; 2],
-    t_in: T,
+    ascending: bool,
+    check_t_min: bool,
+}
+
+impl<T: Real> Stretch<T> {
+    /// Sort key, nearest first: the height at which the curve enters, signed by direction.
+    fn order(&self) -> T {
+        if self.ascending {
+            self.h[0]
+        } else {
+            -self.h[1]
+        }
+    }
 }
 
 /// Stretches one node may hand to its children before the traversal gives up on stretches
@@ -284,28 +297,35 @@ struct Stretch<T> {
 /// (they are quadratics), so it falls into at most 5 pieces, each in one child; only a piece
 /// within rounding of a split line goes to both sides.
 const STRETCHES_PER_NODE: usize = 8;
-/// Stretches in the boxes of the (at most 4) roots: a quadratic curve meets the 4 faces of a
-/// square at most 8 times and the denominator's 2 zeros split it further.
-const ROOT_STRETCHES: usize = 24;
-const CURVE_STACK: usize = ROOT_STRETCHES + (STRETCHES_PER_NODE - 1) * MAX_ROOT_LEVEL;
+const CURVE_STACK: usize = 4 * STRETCHES_PER_NODE + (STRETCHES_PER_NODE - 1) * MAX_ROOT_LEVEL;
 
 /// The implicit quadtree over the cells of one base triangle walked along the nonlinear ray's
-/// texture-space curve, nearest first (the BLAS traversal of Ogaki 2023, sec. 4.4, with one
-/// box test per root instead of one per node).
+/// texture-space curve, nearest first (the BLAS traversal of Ogaki 2023, sec. 4.4, without a
+/// box test per node).
 ///
-/// The roots' boxes (cells `[x 2^l, (x + 1) 2^l)`, heights from `node_heights(level, x, y)`)
-/// give the stretches of the curve inside them, by heights ([`TextureCurve::box_pieces`]).
-/// A node's stretch is cut where the curve crosses the node's two split lines (the roots of
-/// two quadratics on the stretch's height interval, [`TextureCurve::crossings`]), each piece
-/// lies in one child, found from its midpoint, and goes there with its heights clipped to the
-/// child's height bounds: a child whose bounds miss the piece's heights cannot hold a hit
-/// there. Two quadratics per node replace the four box tests of the children (each up to
-/// five quadratics). Rounding is covered as in the box test: a piece's ends at a crossing
-/// are widened by the crossing's error window, and a piece whose midpoint is within the
-/// rounding bound of a split line goes to both sides (a curve running along a texel edge).
-/// Cells whose square misses the triangle's uv triangle `uv_tri` (in cell units) are
-/// skipped; pieces entered beyond the current `t_max` are skipped; `leaf(x, y, t_max,
-/// stats)` tests a cell and returns the distance of a hit nearer than `t_max`.
+/// It starts from the heights at which the ray is inside the prism ([`BaseEdges::stretches`],
+/// cut to the roots' height bounds from `node_heights(level, x, y)`; no separate ray-prism
+/// test is needed). A node's stretch is cut where the curve crosses the node's two split lines
+/// (the roots of two quadratics on the stretch's height interval,
+/// [`TextureCurve::crossings`]); between two cuts the curve stays on one side of each line,
+/// so whatever of the piece lies in the node's square lies in one child, found from the
+/// piece's midpoint, and the piece goes there with its heights clipped to the child's height
+/// bounds: a child whose bounds miss the piece's heights cannot hold a hit there. The roots
+/// are the children of a virtual node split between them. Two quadratics per node replace
+/// the four box tests of the children (each up to five quadratics). Rounding is covered as
+/// in the box test: a piece's ends at a crossing are widened by the crossing's error window,
+/// and a piece whose midpoint is within the rounding bound of a split line goes to both
+/// sides (a curve running along a texel edge).
+///
+/// Order and culling: along a stretch the distance is monotonic in the height where the
+/// shell does not fold (a point of the ray has one height), so children are visited in
+/// order of entry height in the stretch's direction, and distances are computed only when
+/// they can cull: once a hit has set a finite `t_max`, or for stretches that began before
+/// `t_min`, a stretch is skipped when the distances at its ends are both beyond `t_max` or
+/// both before `t_min` (as in the box test, exact where the shell does not fold, a sample
+/// where it does). Cells whose square misses the triangle's uv triangle `uv_tri` (in cell
+/// units) are skipped; `leaf(x, y, t_max, stats)` tests a cell and returns the distance of a
+/// hit nearer than `t_max`.
 ///
 /// Returns `false` when a node produced more pieces than the fixed stack holds (only
 /// possible for curves running within rounding of many split lines at once): the caller then
@@ -315,6 +335,7 @@ const CURVE_STACK: usize = ROOT_STRETCHES + (STRETCHES_PER_NODE - 1) * MAX_ROOT_
 pub(crate) fn traverse_curve_cells<T: Real>(
     root: RootNodes,
     curve: &TextureCurve<'_, T>,
+    edges: &BaseEdges<T>,
     cell_size: T,
     uv_tri: [[T; 2]; 3],
     t_min: T,
@@ -328,7 +349,8 @@ pub(crate) fn traverse_curve_cells<T: Real>(
         x: 0,
         y: 0,
         h: [T::ZERO; 2],
-        t_in: T::ZERO,
+        ascending: true,
+        check_t_min: false,
     };
     let mut stack = [empty; CURVE_STACK];
     let mut depth = 0;
@@ -345,13 +367,13 @@ pub(crate) fn traverse_curve_cells<T: Real>(
         let hi = [T::from_f64((cx0 + k) as f64), T::from_f64((cy0 + k) as f64)];
         square_meets_triangle(lo, hi, &uv_tri)
     };
-    // Sorted insertion by entry distance (few entries).
+    // Sorted insertion, nearest first (few entries); false when full.
     let insert = |found: &mut [Stretch<T>], n: &mut usize, s: Stretch<T>| -> bool {
         if *n == found.len() {
             return false;
         }
         let mut i = *n;
-        while i > 0 && found[i - 1].t_in > s.t_in {
+        while i > 0 && found[i - 1].order() > s.order() {
             found[i] = found[i - 1];
             i -= 1;
         }
@@ -359,92 +381,55 @@ pub(crate) fn traverse_curve_cells<T: Real>(
         *n += 1;
         true
     };
-    {
-        let mut found = [empty; ROOT_STRETCHES];
-        let mut n = 0;
-        let mut complete = true;
-        for j in 0..i32::from(root.ny) {
-            for i in 0..i32::from(root.nx) {
-                let (x, y) = (root.x + i, root.y + j);
-                if !wanted(root.level, x, y) {
-                    continue;
-                }
-                stats.box_tests += 1;
-                let k = 1i64 << root.level;
-                let (cx0, cy0) = (i64::from(x) * k, i64::from(y) * k);
-                let [h_lo, h_hi] = node_heights(root.level, x, y);
-                let lo = [cell(cx0), cell(cy0), h_lo];
-                let hi = [cell(cx0 + k), cell(cy0 + k), h_hi];
-                curve.box_pieces(lo, hi, t_min, *t_max, |p| {
-                    let s = Stretch {
-                        level: root.level,
-                        x,
-                        y,
-                        h: [p.h_in, p.h_out],
-                        t_in: p.t_in,
-                    };
-                    complete &= insert(&mut found, &mut n, s);
-                });
-            }
-        }
-        if !complete {
-            return false;
-        }
-        for s in found[..n].iter().rev() {
-            stack[depth] = *s;
-            depth += 1;
-        }
-    }
-    while depth > 0 {
-        depth -= 1;
-        let node = stack[depth];
-        if node.t_in > *t_max {
-            continue;
-        }
-        if node.level == 0 {
-            if let Some(t) = leaf(node.x, node.y, *t_max, stats) {
-                *t_max = t;
-            }
-            continue;
-        }
-        let level = node.level - 1;
-        let (x, y) = (node.x * 2, node.y * 2);
-        let half = 1i64 << level;
-        let split = [cell(i64::from(x + 1) * half), cell(i64::from(y + 1) * half)];
-        let [a, b] = node.h;
+    // Cuts `stretch` (heights `[a, b]`) at the crossings of the split lines (`None`: no line
+    // on that axis) and hands each piece to its child at `level`, `(x + qx, y + qy)`, clipped
+    // to the child's height bounds, nearest first into `found`; false when `found` is full.
+    let split = |stretch: &Stretch<T>,
+                 lines: [Option<T>; 2],
+                 (level, x, y): (u32, i32, i32),
+                 found: &mut [Stretch<T>],
+                 n: &mut usize,
+                 stats: &mut TraversalStats|
+     -> bool {
+        let [a, b] = stretch.h;
         // The stretch's ends and its crossings of the split lines, each with its window.
         let mut cuts = [(a, T::ZERO); 6];
         let mut m = 1;
-        for (axis, &line) in split.iter().enumerate() {
-            let (roots, k) = curve.crossings(axis, line, a, b);
-            for &r in &roots[..k] {
-                cuts[m] = r;
-                m += 1;
+        for (axis, line) in lines.iter().enumerate() {
+            if let Some(line) = *line {
+                let (roots, k) = curve.crossings(axis, line, a, b);
+                for &r in &roots[..k] {
+                    cuts[m] = r;
+                    m += 1;
+                }
             }
         }
         cuts[m] = (b, T::ZERO);
         m += 1;
         let cuts = &mut cuts[..m];
         cuts.sort_unstable_by(|p, q| p.0.partial_cmp(&q.0).unwrap_or(core::cmp::Ordering::Equal));
-        let mut found = [empty; STRETCHES_PER_NODE];
-        let mut n = 0;
         for i in 0..m - 1 {
             let ((c0, w0), (c1, w1)) = (cuts[i], cuts[i + 1]);
             // Zero-length pieces lie on a cut; a stretch that is one point is one piece.
             if !(c1 > c0 || (a == b && i == 0)) {
                 continue;
             }
-            let mid = (c0 + c1) * T::HALF;
-            // Children on each axis: [first, last] of {0, 1}.
-            let sides = match curve.uv_with_error(mid) {
-                Some((uv, e)) => [0, 1].map(|k| {
-                    [
-                        u8::from(uv[k] > split[k] + e[k]),
-                        u8::from(uv[k] >= split[k] - e[k]),
-                    ]
-                }),
-                None => [[0, 1]; 2],
-            };
+            // Children on each axis: first and last of {0, 1}. Between two cuts the piece
+            // stays on one side of each line (the inside of the node's square is then in one
+            // child; what lies outside the square is never inside a child's).
+            let mut sides = [[0u8, 0]; 2];
+            let uv = curve.uv_with_error((c0 + c1) * T::HALF);
+            for (k, line) in lines.iter().enumerate() {
+                if let Some(line) = *line {
+                    sides[k] = match uv {
+                        Some((uv, e)) => [
+                            u8::from(uv[k] > line + e[k]),
+                            u8::from(uv[k] >= line - e[k]),
+                        ],
+                        None => [0, 1],
+                    };
+                }
+            }
             let (lo_h, hi_h) = ((c0 - w0).max(a), (c1 + w1).min(b));
             for qy in sides[1][0]..=sides[1][1] {
                 for qx in sides[0][0]..=sides[0][1] {
@@ -458,31 +443,110 @@ pub(crate) fn traverse_curve_cells<T: Real>(
                     if !(h0 <= h1) {
                         continue;
                     }
-                    // Distances at the clipped ends (the piece's distances lie between them
-                    // where the shell does not fold, as in the box test).
-                    let t_in = match (curve.distance(h0), curve.distance(h1)) {
-                        (Some(ta), Some(tb)) => {
-                            if ta.max(tb) < t_min || ta.min(tb) > *t_max {
-                                continue;
-                            }
-                            ta.min(tb).max(t_min)
-                        }
-                        _ => t_min,
-                    };
-                    let s = Stretch {
+                    let child = Stretch {
                         level,
                         x: cx,
                         y: cy,
                         h: [h0, h1],
-                        t_in,
+                        ..*stretch
                     };
-                    if !insert(&mut found, &mut n, s) {
+                    if !insert(found, n, child) {
                         return false;
                     }
                 }
             }
         }
-        if depth + n > CURVE_STACK {
+        true
+    };
+    {
+        // The ray inside the prism (the curve inside the base triangle, its ends widened as
+        // the texel test widens them) at the roots' heights, as stretches of a virtual node
+        // whose children are the roots, in order of entry distance.
+        let (mut h_lo, mut h_hi) = (T::INFINITY, T::NEG_INFINITY);
+        for j in 0..i32::from(root.ny) {
+            for i in 0..i32::from(root.nx) {
+                let [lo, hi] = node_heights(root.level, root.x + i, root.y + j);
+                h_lo = h_lo.min(lo);
+                h_hi = h_hi.max(hi);
+            }
+        }
+        let mut roots = [(empty, T::ZERO); 4];
+        let mut n = 0;
+        let mut complete = true;
+        edges.stretches(h_lo, h_hi, |h_in, h_out| {
+            let (t0, t1) = (curve.distance(h_in), curve.distance(h_out));
+            let (t_lo, t_hi, ascending) = match (t0, t1) {
+                (Some(a), Some(b)) => (a.min(b), a.max(b), b >= a),
+                _ => (T::NEG_INFINITY, T::INFINITY, true),
+            };
+            if t_hi < t_min || t_lo > *t_max {
+                return;
+            }
+            if n == roots.len() {
+                complete = false;
+                return;
+            }
+            let stretch = Stretch {
+                h: [h_in, h_out],
+                ascending,
+                check_t_min: !(t_lo >= t_min),
+                ..empty
+            };
+            let mut i = n;
+            while i > 0 && roots[i - 1].1 > t_lo {
+                roots[i] = roots[i - 1];
+                i -= 1;
+            }
+            roots[i] = (stretch, t_lo);
+            n += 1;
+        });
+        if !complete {
+            return false;
+        }
+        let k = 1i64 << root.level;
+        let lines = [
+            (root.nx == 2).then(|| cell(i64::from(root.x + 1) * k)),
+            (root.ny == 2).then(|| cell(i64::from(root.y + 1) * k)),
+        ];
+        for (stretch, _) in roots[..n].iter().rev() {
+            let mut found = [empty; STRETCHES_PER_NODE];
+            let mut m = 0;
+            let base = (root.level, root.x, root.y);
+            if !split(stretch, lines, base, &mut found, &mut m, stats) || depth + m > CURVE_STACK {
+                return false;
+            }
+            for s in found[..m].iter().rev() {
+                stack[depth] = *s;
+                depth += 1;
+            }
+        }
+    }
+    while depth > 0 {
+        depth -= 1;
+        let node = stack[depth];
+        if (*t_max < T::INFINITY || node.check_t_min)
+            && let (Some(ta), Some(tb)) = (curve.distance(node.h[0]), curve.distance(node.h[1]))
+            && (ta.min(tb) > *t_max || ta.max(tb) < t_min)
+        {
+            continue;
+        }
+        if node.level == 0 {
+            if let Some(t) = leaf(node.x, node.y, *t_max, stats) {
+                *t_max = t;
+            }
+            continue;
+        }
+        let level = node.level - 1;
+        let (x, y) = (node.x * 2, node.y * 2);
+        let half = 1i64 << level;
+        let lines = [
+            Some(cell(i64::from(x + 1) * half)),
+            Some(cell(i64::from(y + 1) * half)),
+        ];
+        let mut found = [empty; STRETCHES_PER_NODE];
+        let mut n = 0;
+        if !split(&node, lines, (level, x, y), &mut found, &mut n, stats) || depth + n > CURVE_STACK
+        {
             return false;
         }
         for s in found[..n].iter().rev() {
@@ -502,6 +566,7 @@ pub(crate) fn walk_cells<T: Real>(
     root: RootNodes,
     prism: &Prism<T>,
     ray: &NonlinearRay<T>,
+    edges: &BaseEdges<T>,
     cell_size: T,
     t_min: T,
     t_max: T,
@@ -515,6 +580,7 @@ pub(crate) fn walk_cells<T: Real>(
     let complete = traverse_curve_cells(
         root,
         &curve,
+        edges,
         cell_size,
         uv_tri,
         t_min,

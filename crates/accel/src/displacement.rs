@@ -4,7 +4,9 @@
 use core::fmt;
 use nlrt_poly::{Real, Vector2, Vector3};
 use nlrt_poly::{horner_with_bound_scaled, solve_cubic_in, solve_quadratic_in};
-use nlrt_shellmap::{Hit, NonlinearRay, Prism, Ray, TexturePlane, alpha_beta_eq11, world_normal};
+use nlrt_shellmap::{
+    BaseEdges, Hit, NonlinearRay, Prism, Ray, TexturePlane, alpha_beta_eq11, world_normal,
+};
 
 use crate::bvh::{Aabb, Bvh4};
 use crate::cells::{PrismTlas, SetupError, facing_unit, walk_cells};
@@ -245,6 +247,21 @@ impl<T: Real> DisplacedSurface<T> {
         t_min: T,
         t_max: T,
     ) -> Option<(Hit<T>, TexelPart)> {
+        self.texel_hit(prism, ray, &BaseEdges::new(ray), x, y, t_min, t_max)
+    }
+
+    /// [`DisplacedSurface::intersect_texel`] with the base edges computed once per prism.
+    #[allow(clippy::too_many_arguments)]
+    fn texel_hit(
+        &self,
+        prism: &Prism<T>,
+        ray: &NonlinearRay<T>,
+        edges: &BaseEdges<T>,
+        x: i32,
+        y: i32,
+        t_min: T,
+        t_max: T,
+    ) -> Option<(Hit<T>, TexelPart)> {
         let ([u0, v0, u1, v1], [h00, h10, h01, h11]) = self.texel_geometry(x, y);
         let flat = h00 == h10 && h00 == h01 && h00 == h11;
         let (part_l, part_u) = if flat {
@@ -292,9 +309,7 @@ impl<T: Real> DisplacedSurface<T> {
             n += 1;
         }
         // The base triangle's edges: alpha = 0, beta = 0, alpha + beta = 1 (times D).
-        let alpha_plus_beta_minus_one: [T; 3] =
-            core::array::from_fn(|i| ray.alpha[i] + ray.beta[i] - ray.d[i]);
-        let base_edges = [ray.alpha, ray.beta, alpha_plus_beta_minus_one];
+        let base_edges = &edges.edges;
         for (k, q) in base_edges.iter().enumerate() {
             for &r in solve_quadratic_in(*q, h_lo, h_hi).iter() {
                 splits[n] = (r, 6 + k as u8);
@@ -350,13 +365,7 @@ impl<T: Real> DisplacedSurface<T> {
             if !(u >= u0 && u <= u1 && v >= v0 && v <= v1) {
                 return None;
             }
-            // Inside the base triangle: each edge function (times D) has the sign of D, the
-            // third reversed.
-            let at = |q: &[T; 3]| q[2].mul_add(h, q[1]).mul_add(h, q[0]);
-            let positive = d > T::ZERO;
-            let (a, b, c) = (at(&base_edges[0]), at(&base_edges[1]), at(&base_edges[2]));
-            let same = |x: T| x == T::ZERO || (x > T::ZERO) == positive;
-            if !(same(a) && same(b) && same(-c)) {
+            if !edges.contains(h) {
                 return None;
             }
             let f = diagonal[2].mul_add(h, diagonal[1]).mul_add(h, diagonal[0]);
@@ -369,29 +378,8 @@ impl<T: Real> DisplacedSurface<T> {
                 (&cubic_u, &abh_u, part_u)
             }
         };
-        // A bound on the error of a base-edge crossing height `s` (a root of one of
-        // `base_edges`): the quadratic's coefficients are differences of products of Eq. 6's
-        // rows (entries at most `row_max`), so each carries an error below gamma(32) row_max^2
-        // (a generous count of roundings); divided by the slope, that moves the root.
-        let row_max = ray
-            .rows
-            .iter()
-            .flatten()
-            .flatten()
-            .fold(T::ZERO, |m, &x| m.max(x.abs()));
-        let g32 =
-            T::from_i32(32) * T::UNIT_ROUNDOFF / (T::ONE - T::from_i32(32) * T::UNIT_ROUNDOFF);
-        let edge_window = |edge: u8, s: T| -> T {
-            let q = &base_edges[usize::from(edge - 6)];
-            let slope = (T::TWO * q[2]).mul_add(s, q[1]).abs();
-            let a = s.abs();
-            let err = g32 * row_max * row_max * (T::ONE + a + a * a);
-            if slope > T::ZERO {
-                err / slope
-            } else {
-                T::INFINITY
-            }
-        };
+        // The error window of a base-edge crossing (split tags 6-8).
+        let edge_window = |edge: u8, s: T| edges.window(usize::from(edge - 6), s);
         if flat {
             // The curve meets the plane h = h00 at one point: a hit when that point is in the
             // texel (u(h), v(h) are the same numbers in every texel, so neighbours agree) and
@@ -479,9 +467,11 @@ impl<T: Real> DisplacedSurface<T> {
     }
 
     /// The nearest hit of `ray` on the displaced surface of triangle `tri` through the
-    /// min-max pyramid (the BLAS): texture-space box test per node, children in order of
-    /// entry distance, nodes entered beyond the current nearest hit skipped, texels whose uv
-    /// square misses the base triangle's uv triangle skipped (texel discard), and per texel
+    /// min-max pyramid (the BLAS): the ray's curve walked down the pyramid from the heights at
+    /// which it is inside the prism, cut at each node's split lines, each piece clipped to
+    /// its child's height bounds (see `traverse_curve_cells` in `cells.rs`), children in order
+    /// of entry, pieces entered beyond the current nearest hit skipped, texels whose uv square
+    /// misses the base triangle's uv triangle skipped (texel discard), and per texel
     /// the watertight piece search of [`DisplacedSurface::intersect_texel`], each plane's
     /// cubic solved only on the height interval of its piece.
     pub fn intersect_blas(
@@ -494,10 +484,12 @@ impl<T: Real> DisplacedSurface<T> {
         stats: &mut TraversalStats,
     ) -> Option<SurfaceHit<T>> {
         let mut best = None;
+        let edges = BaseEdges::new(ray);
         walk_cells(
             self.prisms.roots(tri),
             prism,
             ray,
+            &edges,
             self.texel_size,
             t_min,
             t_max,
@@ -508,7 +500,7 @@ impl<T: Real> DisplacedSurface<T> {
             },
             |x, y, t_max, stats| {
                 stats.texel_tests += 1;
-                let (hit, part) = self.intersect_texel(prism, ray, x, y, t_min, t_max)?;
+                let (hit, part) = self.texel_hit(prism, ray, &edges, x, y, t_min, t_max)?;
                 best = Some(SurfaceHit {
                     hit,
                     triangle: tri as u32,
@@ -551,7 +543,8 @@ impl<T: Real> DisplacedSurface<T> {
     }
 
     /// The nearest hit of `ray` with `t` in `[t_min, t_max]`: TLAS traversal (conservative
-    /// slab tests, nearest first), the exact ray-prism test as a gate, then the BLAS.
+    /// slab tests, nearest first), then the BLAS from the heights at which the ray is inside
+    /// each prism.
     pub fn intersect(
         &self,
         ray: &Ray<T>,

@@ -8,7 +8,7 @@ use alloc::vec::Vec;
 use core::fmt;
 use nlrt_poly::{Real, Vector3};
 use nlrt_shellmap::{
-    Hit, NonlinearRay, Prism, Ray, TexturePlane, intersect_box, intersect_microtriangle,
+    BaseEdges, Hit, NonlinearRay, Prism, Ray, TexturePlane, intersect_box, intersect_microtriangle,
     world_normal,
 };
 
@@ -310,6 +310,7 @@ impl<T: Real> ShellSurface<T> {
             self.prisms.roots(tri),
             prism,
             ray,
+            &BaseEdges::new(ray),
             T::ONE,
             t_min,
             t_max,
@@ -356,7 +357,7 @@ impl<T: Real> ShellSurface<T> {
         best
     }
 
-    /// The nearest hit: TLAS, prism gate, quadtree, object BVH.
+    /// The nearest hit: TLAS, the quadtree walked along the ray's curve, object BVH.
     pub fn intersect(
         &self,
         ray: &Ray<T>,

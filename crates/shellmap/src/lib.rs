@@ -44,4 +44,4 @@ pub use microtriangle::{
 };
 pub use prism::{Canonical, Prism};
 pub use prism_hit::{PrismSpan, intersect_prism};
-pub use ray::{NonlinearRay, Ray};
+pub use ray::{BaseEdges, NonlinearRay, Ray};

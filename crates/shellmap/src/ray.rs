@@ -1,7 +1,7 @@
 //! World rays and their images in a prism: nonlinear rays (Ogaki 2023, sec. 4.1-4.2).
 
 use crate::prism::Prism;
-use nlrt_poly::{Real, Vector2, Vector3, difference_of_products};
+use nlrt_poly::{Real, Vector2, Vector3, difference_of_products, solve_quadratic_in};
 
 /// A world-space ray `o + t w` with unit direction.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -165,5 +165,131 @@ impl<T: Real> NonlinearRay<T> {
         self.ray
             .dir
             .dot(prism.shell_point(alpha, beta, h) - self.ray.origin)
+    }
+}
+
+/// The base triangle's edges seen along a nonlinear ray: `alpha(h) = 0`, `beta(h) = 0` and
+/// `alpha(h) + beta(h) = 1`, times the denominator (the quadratics `A`, `B` and `A + B - D`),
+/// with bounds on where their computed crossings may lie. Where a ray leaves one prism and
+/// enters its neighbour, both compute the crossing of the shared edge with their own
+/// rounding; the window of [`BaseEdges::window`] around a crossing holds both, so searches
+/// extended by it overlap and leave no gap between prisms.
+#[derive(Clone, Copy, Debug)]
+pub struct BaseEdges<T: Real> {
+    /// `A`, `B` and `A + B - D`, ascending powers.
+    pub edges: [[T; 3]; 3],
+    /// The denominator `D`.
+    d: [T; 3],
+    /// `gamma(32) row_max^2`: see [`BaseEdges::window`].
+    error_scale: T,
+}
+
+impl<T: Real> BaseEdges<T> {
+    /// The edges of `ray`'s prism.
+    #[must_use]
+    pub fn new(ray: &NonlinearRay<T>) -> Self {
+        let sum: [T; 3] = core::array::from_fn(|i| ray.alpha[i] + ray.beta[i] - ray.d[i]);
+        let row_max = ray
+            .rows
+            .iter()
+            .flatten()
+            .flatten()
+            .fold(T::ZERO, |m, &x| m.max(x.abs()));
+        let g32 =
+            T::from_i32(32) * T::UNIT_ROUNDOFF / (T::ONE - T::from_i32(32) * T::UNIT_ROUNDOFF);
+        Self {
+            edges: [ray.alpha, ray.beta, sum],
+            d: ray.d,
+            error_scale: g32 * row_max * row_max,
+        }
+    }
+
+    /// Half-width of a window around `s`, a computed crossing of edge `k` (0: `alpha = 0`,
+    /// 1: `beta = 0`, 2: `alpha + beta = 1`), that holds the exact crossing: each coefficient
+    /// of the edge's quadratic is a difference of products of Eq. 6's rows (entries at most
+    /// `row_max`) and errs by less than `gamma(32) row_max^2` (a generous count of
+    /// roundings); divided by the slope at `s`, that bounds how far the root moves. Infinite
+    /// where the slope is 0.
+    #[must_use]
+    #[inline]
+    pub fn window(&self, k: usize, s: T) -> T {
+        let q = &self.edges[k];
+        let slope = (T::TWO * q[2]).mul_add(s, q[1]).abs();
+        let a = s.abs();
+        let err = self.error_scale * (T::ONE + a + a * a);
+        if slope > T::ZERO {
+            err / slope
+        } else {
+            T::INFINITY
+        }
+    }
+
+    /// Whether the curve at height `h` is inside the base triangle (edges included): each
+    /// edge function (times `D`) has the sign of `D`, the third reversed. `false` where `D` is
+    /// 0.
+    #[must_use]
+    #[inline]
+    pub fn contains(&self, h: T) -> bool {
+        let d = quadratic_at(&self.d, h);
+        if d == T::ZERO {
+            return false;
+        }
+        let positive = d > T::ZERO;
+        let same = |x: T| x == T::ZERO || (x > T::ZERO) == positive;
+        same(quadratic_at(&self.edges[0], h))
+            && same(quadratic_at(&self.edges[1], h))
+            && same(-quadratic_at(&self.edges[2], h))
+    }
+
+    /// Calls `stretch(h_in, h_out)` for each interval of heights in `[h_lo, h_hi]` where the
+    /// curve is inside the base triangle, i.e. the ray inside the prism cut to those heights;
+    /// an end on an edge is widened by that crossing's [`BaseEdges::window`] (kept within
+    /// `[h_lo, h_hi]`). Between consecutive crossings and poles inside-ness cannot change, so
+    /// each piece is decided at its midpoint; a curve that only touches the triangle gives
+    /// `h_in == h_out`.
+    pub fn stretches(&self, h_lo: T, h_hi: T, mut stretch: impl FnMut(T, T)) {
+        if !(h_lo <= h_hi) {
+            return;
+        }
+        // (height, window) of each candidate: the ends, the edge crossings, the poles.
+        let mut cuts = [(T::ZERO, T::ZERO); 10];
+        cuts[0] = (h_lo, T::ZERO);
+        cuts[1] = (h_hi, T::ZERO);
+        let mut n = 2;
+        for k in 0..3 {
+            for &r in solve_quadratic_in(self.edges[k], h_lo, h_hi).iter() {
+                cuts[n] = (r, self.window(k, r));
+                n += 1;
+            }
+        }
+        for &r in solve_quadratic_in(self.d, h_lo, h_hi).iter() {
+            cuts[n] = (r, T::ZERO);
+            n += 1;
+        }
+        let cuts = &mut cuts[..n];
+        cuts.sort_unstable_by(|a, b| a.0.partial_cmp(&b.0).unwrap_or(core::cmp::Ordering::Equal));
+        let mut open: Option<T> = None;
+        let mut close = |from: T, (to, w): (T, T)| stretch(from, (to + w).min(h_hi));
+        for i in 0..n - 1 {
+            let ((c0, w0), (c1, _)) = (cuts[i], cuts[i + 1]);
+            let inside = if c1 > c0 {
+                self.contains((c0 + c1) * T::HALF)
+            } else {
+                continue;
+            };
+            match (inside, open) {
+                (true, None) => open = Some((c0 - w0).max(h_lo)),
+                (false, Some(from)) => {
+                    close(from, cuts[i]);
+                    open = None;
+                }
+                _ => {}
+            }
+        }
+        if let Some(from) = open {
+            close(from, cuts[n - 1]);
+        } else if h_lo == h_hi && self.contains(h_lo) {
+            stretch(h_lo, h_hi);
+        }
     }
 }
