@@ -272,7 +272,7 @@ pub(crate) fn traverse_cells<T: Real>(
 /// distance along the ray grows with the height, and whether its distances must be checked
 /// against `t_min` (its root stretch began before it).
 #[derive(Clone, Copy)]
-struct Stretch<T> {
+pub(crate) struct Stretch<T> {
     level: u32,
     x: i32,
     y: i32,
@@ -282,6 +282,18 @@ struct Stretch<T> {
 }
 
 impl<T: Real> Stretch<T> {
+    /// An unused entry (all zero bits: arrays of it are initialised by a memset).
+    fn empty() -> Self {
+        Self {
+            level: 0,
+            x: 0,
+            y: 0,
+            h: [T::ZERO; 2],
+            ascending: false,
+            check_t_min: false,
+        }
+    }
+
     /// Sort key, nearest first: the height at which the curve enters, signed by direction.
     fn order(&self) -> T {
         if self.ascending {
@@ -297,7 +309,13 @@ impl<T: Real> Stretch<T> {
 /// (they are quadratics), so it falls into at most 5 pieces, each in one child; only a piece
 /// within rounding of a split line goes to both sides.
 const STRETCHES_PER_NODE: usize = 8;
-const CURVE_STACK: usize = 4 * STRETCHES_PER_NODE + (STRETCHES_PER_NODE - 1) * MAX_ROOT_LEVEL;
+/// Entries of the stretch stack. A walk holds at most the pending siblings of each level on
+/// its path, typically one or two (a stretch crosses few split lines); the worst case, 7 per
+/// level, would make the stack 5 KiB, which costs more to initialise per prism than the walk
+/// of a thick shell's many prisms. So it is sized for 3 per level of a 4096^2 map (12
+/// levels) and the rare walk that needs more is finished by the box-test traversal
+/// (`walk_cells`), counted in [`TraversalStats::fallbacks`].
+pub(crate) const CURVE_STACK: usize = 48;
 
 /// The implicit quadtree over the cells of one base triangle walked along the nonlinear ray's
 /// texture-space curve, nearest first (the BLAS traversal of Ogaki 2023, sec. 4.4, without a
@@ -333,6 +351,7 @@ const CURVE_STACK: usize = 4 * STRETCHES_PER_NODE + (STRETCHES_PER_NODE - 1) * M
 /// leaves saw so far.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn traverse_curve_cells<T: Real>(
+    stack: &mut [Stretch<T>],
     root: RootNodes,
     curve: &TextureCurve<'_, T>,
     edges: &BaseEdges<T>,
@@ -344,15 +363,7 @@ pub(crate) fn traverse_curve_cells<T: Real>(
     node_heights: impl Fn(u32, i32, i32) -> [T; 2],
     mut leaf: impl FnMut(i32, i32, T, &mut TraversalStats) -> Option<T>,
 ) -> bool {
-    let empty = Stretch {
-        level: 0,
-        x: 0,
-        y: 0,
-        h: [T::ZERO; 2],
-        ascending: true,
-        check_t_min: false,
-    };
-    let mut stack = [empty; CURVE_STACK];
+    let empty = Stretch::empty();
     let mut depth = 0;
     let cell = |c: i64| T::from_f64(c as f64) * cell_size;
     // Whether node (level, x, y) is in the root's texel range and may meet the uv triangle.
@@ -512,7 +523,7 @@ pub(crate) fn traverse_curve_cells<T: Real>(
             let mut found = [empty; STRETCHES_PER_NODE];
             let mut m = 0;
             let base = (root.level, root.x, root.y);
-            if !split(stretch, lines, base, &mut found, &mut m, stats) || depth + m > CURVE_STACK {
+            if !split(stretch, lines, base, &mut found, &mut m, stats) || depth + m > stack.len() {
                 return false;
             }
             for s in found[..m].iter().rev() {
@@ -545,7 +556,7 @@ pub(crate) fn traverse_curve_cells<T: Real>(
         ];
         let mut found = [empty; STRETCHES_PER_NODE];
         let mut n = 0;
-        if !split(&node, lines, (level, x, y), &mut found, &mut n, stats) || depth + n > CURVE_STACK
+        if !split(&node, lines, (level, x, y), &mut found, &mut n, stats) || depth + n > stack.len()
         {
             return false;
         }
@@ -562,7 +573,7 @@ pub(crate) fn traverse_curve_cells<T: Real>(
 /// rare case it gives up. `node_heights(level, x, y)` bounds the heights of a node's
 /// content; `leaf` as in [`traverse_cells`].
 #[allow(clippy::too_many_arguments)]
-pub(crate) fn walk_cells<T: Real>(
+pub(crate) fn walk_cells<T: Real, const STACK_LEN: usize>(
     root: RootNodes,
     prism: &Prism<T>,
     ray: &NonlinearRay<T>,
@@ -577,7 +588,9 @@ pub(crate) fn walk_cells<T: Real>(
     let uv_tri = uv_in_cells(prism, cell_size);
     let curve = TextureCurve::new(prism, ray);
     let mut t = t_max;
+    let mut stack = [Stretch::empty(); STACK_LEN];
     let complete = traverse_curve_cells(
+        &mut stack,
         root,
         &curve,
         edges,
@@ -590,6 +603,7 @@ pub(crate) fn walk_cells<T: Real>(
         &mut leaf,
     );
     if !complete {
+        stats.fallbacks += 1;
         traverse_cells(
             root,
             uv_tri,

@@ -9,7 +9,7 @@ use nlrt_shellmap::{
 };
 
 use crate::bvh::{Aabb, Bvh4};
-use crate::cells::{PrismTlas, SetupError, facing_unit, walk_cells};
+use crate::cells::{CURVE_STACK, PrismTlas, SetupError, facing_unit, walk_cells};
 use crate::heightfield::{HEIGHT_ONE, HeightField};
 use crate::mesh::BaseMesh;
 
@@ -96,6 +96,9 @@ pub struct TraversalStats {
     pub box_tests: u32,
     /// Texels tested (each one or two microtriangles, or one flat rectangle).
     pub texel_tests: u32,
+    /// Base triangles whose walk along the ray's curve outgrew its fixed stack and was
+    /// finished by box tests (slower, same answer).
+    pub fallbacks: u32,
 }
 
 /// A displacement-mapped mesh: base mesh, height field, height scale and tiling, with the
@@ -483,9 +486,23 @@ impl<T: Real> DisplacedSurface<T> {
         t_max: T,
         stats: &mut TraversalStats,
     ) -> Option<SurfaceHit<T>> {
+        self.walk_blas::<CURVE_STACK>(tri, prism, ray, t_min, t_max, stats)
+    }
+
+    /// [`DisplacedSurface::intersect_blas`] with a walk stack of `STACK_LEN` entries (tests
+    /// use a tiny one to exercise the fallback).
+    fn walk_blas<const STACK_LEN: usize>(
+        &self,
+        tri: usize,
+        prism: &Prism<T>,
+        ray: &NonlinearRay<T>,
+        t_min: T,
+        t_max: T,
+        stats: &mut TraversalStats,
+    ) -> Option<SurfaceHit<T>> {
         let mut best = None;
         let edges = BaseEdges::new(ray);
-        walk_cells(
+        walk_cells::<T, STACK_LEN>(
             self.prisms.roots(tri),
             prism,
             ray,
@@ -667,5 +684,82 @@ impl<T: Real> DisplacedSurface<T> {
     #[must_use]
     pub fn bounds(&self) -> Aabb<T> {
         self.prisms.tlas.bounds()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{HeightField, Wrap};
+    use alloc::vec;
+    use alloc::vec::Vec;
+    use nlrt_poly::glam::{DVec2, DVec3};
+
+    /// A walk whose stack is too small for its pieces gives up and finishes the triangle by
+    /// box tests: the same nearest hits as the full walk and as testing every texel, and the
+    /// fallback is counted (the full walk never needs it here).
+    #[test]
+    fn walk_with_a_tiny_stack_falls_back_to_the_same_hits() {
+        // Unequal normals: curved prisms, so the ray's texture-space curve is not a line.
+        let normals = [
+            DVec3::new(0.2, 0.1, 1.0),
+            DVec3::new(-0.1, 0.2, 1.0),
+            DVec3::new(0.0, -0.2, 1.0),
+            DVec3::new(0.1, 0.0, 1.0),
+        ]
+        .map(DVec3::normalize);
+        let mesh = BaseMesh::new(
+            vec![DVec3::ZERO, DVec3::X, DVec3::new(1.0, 1.0, 0.0), DVec3::Y],
+            normals.to_vec(),
+            vec![DVec2::ZERO, DVec2::X, DVec2::ONE, DVec2::Y],
+            vec![[0, 1, 2], [0, 2, 3]],
+        )
+        .unwrap();
+        let side = 32;
+        let mut state = 0x9e37_79b9_7f4a_7c15_u64;
+        let heights: Vec<f32> = (0..side * side)
+            .map(|_| {
+                state = state
+                    .wrapping_mul(6_364_136_223_846_793_005)
+                    .wrapping_add(1_442_695_040_888_963_407);
+                (state >> 40) as f32 / (1u64 << 24) as f32
+            })
+            .collect();
+        let field = HeightField::from_unit_heights(side, &heights, Wrap::Repeat).unwrap();
+        let surface = DisplacedSurface::new(mesh, field, 0.2, 1.0).unwrap();
+        let (mut fallbacks, mut hits) = (0, 0);
+        // Hits on an edge shared by two texels may be found by either, at distances that
+        // differ by rounding (distances here are O(1), f64).
+        let same = |a: Option<SurfaceHit<f64>>, b: Option<SurfaceHit<f64>>| match (a, b) {
+            (None, None) => true,
+            (Some(a), Some(b)) => (a.hit.t - b.hit.t).abs() < 1e-12,
+            _ => false,
+        };
+        for i in 0..200 {
+            let (a, b) = (f64::from(i % 20) / 20.0, f64::from(i / 20) / 10.0);
+            let origin = DVec3::new(-0.5 + 2.0 * a, -0.3 + b, 0.8);
+            let dir = DVec3::new(0.6 - 0.5 * a, 0.4 - 0.3 * b, -0.5);
+            let ray = Ray::new(origin, dir).unwrap();
+            for tri in 0..2 {
+                let prism = surface.prism(tri);
+                let nl = NonlinearRay::new(&prism, &ray);
+                let (mut full, mut tiny) = (TraversalStats::default(), TraversalStats::default());
+                let walked =
+                    surface.intersect_blas(tri, &prism, &nl, 0.0, f64::INFINITY, &mut full);
+                let fell_back =
+                    surface.walk_blas::<2>(tri, &prism, &nl, 0.0, f64::INFINITY, &mut tiny);
+                let brute =
+                    surface.intersect_blas_brute_force(tri, &prism, &nl, 0.0, f64::INFINITY);
+                assert!(same(walked, fell_back), "{walked:?} vs {fell_back:?}");
+                assert!(same(walked, brute), "{walked:?} vs {brute:?}");
+                assert_eq!(full.fallbacks, 0);
+                fallbacks += tiny.fallbacks;
+                hits += u32::from(walked.is_some());
+            }
+        }
+        assert!(
+            hits > 50 && fallbacks > 50,
+            "hits {hits}, fallbacks {fallbacks}"
+        );
     }
 }

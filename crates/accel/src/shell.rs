@@ -13,7 +13,7 @@ use nlrt_shellmap::{
 };
 
 use crate::bvh::{Aabb, Bvh4};
-use crate::cells::{PrismTlas, SetupError, facing_unit, walk_cells};
+use crate::cells::{CURVE_STACK, PrismTlas, SetupError, facing_unit, walk_cells};
 use crate::displacement::{MAX_TEXEL_COORDINATE, RootNodes, TraversalStats};
 use crate::mesh::BaseMesh;
 
@@ -306,7 +306,7 @@ impl<T: Real> ShellSurface<T> {
     ) -> Option<ShellHit<T>> {
         let [h_lo, h_hi] = self.object.h_range;
         let mut best = None;
-        walk_cells(
+        walk_cells::<T, CURVE_STACK>(
             self.prisms.roots(tri),
             prism,
             ray,

@@ -33,10 +33,11 @@ fn main() {
     }
     let n = (w * h) as f64;
     println!(
-        "{name}: {:.3} s, hits {hits}, per ray: prisms {:.2} boxes {:.2} texels {:.2}",
+        "{name}: {:.3} s, hits {hits}, per ray: prisms {:.2} boxes {:.2} texels {:.2} fallbacks {}",
         t0.elapsed().as_secs_f64(),
         st.prism_tests as f64 / n,
         st.box_tests as f64 / n,
-        st.texel_tests as f64 / n
+        st.texel_tests as f64 / n,
+        st.fallbacks
     );
 }

@@ -241,6 +241,46 @@ impl<T: Real> BaseEdges<T> {
             && same(-quadratic_at(&self.edges[2], h))
     }
 
+    /// Whether the curve is outside the triangle at every height of `[h_lo, h_hi]`, decided
+    /// cheaply: the denominator keeps one sign and one edge function the other, by their
+    /// ranges (ends and vertex of each quadratic) with the coefficient error bound of
+    /// [`BaseEdges::window`] as margin, so the exact functions have those signs too and no
+    /// crossing or window is lost. Most prisms whose box a ray enters but which it misses
+    /// (overlapping boxes of thick shells) are rejected here without solving a quadratic.
+    #[must_use]
+    #[inline]
+    pub fn misses(&self, h_lo: T, h_hi: T) -> bool {
+        let a = h_lo.abs().max(h_hi.abs());
+        let margin = self.error_scale * (T::ONE + a + a * a);
+        let range = |c: &[T; 3]| {
+            let (x, y) = (quadratic_at(c, h_lo), quadratic_at(c, h_hi));
+            let (mut lo, mut hi) = (x.min(y), x.max(y));
+            if c[2] != T::ZERO {
+                let vertex = -c[1] / (T::TWO * c[2]);
+                if vertex > h_lo && vertex < h_hi {
+                    let z = quadratic_at(c, vertex);
+                    lo = lo.min(z);
+                    hi = hi.max(z);
+                }
+            }
+            (lo - margin, hi + margin)
+        };
+        let (d_lo, d_hi) = range(&self.d);
+        let sign = if d_lo > T::ZERO {
+            T::ONE
+        } else if d_hi < T::ZERO {
+            -T::ONE
+        } else {
+            return false;
+        };
+        // Inside needs sign * A >= 0, sign * B >= 0 and sign * (A + B - D) <= 0.
+        (0..3).any(|k| {
+            let (lo, hi) = range(&self.edges[k]);
+            let (lo, hi) = if sign > T::ZERO { (lo, hi) } else { (-hi, -lo) };
+            if k < 2 { hi < T::ZERO } else { lo > T::ZERO }
+        })
+    }
+
     /// Calls `stretch(h_in, h_out)` for each interval of heights in `[h_lo, h_hi]` where the
     /// curve is inside the base triangle, i.e. the ray inside the prism cut to those heights;
     /// an end on an edge is widened by that crossing's [`BaseEdges::window`] (kept within
@@ -248,7 +288,7 @@ impl<T: Real> BaseEdges<T> {
     /// each piece is decided at its midpoint; a curve that only touches the triangle gives
     /// `h_in == h_out`.
     pub fn stretches(&self, h_lo: T, h_hi: T, mut stretch: impl FnMut(T, T)) {
-        if !(h_lo <= h_hi) {
+        if !(h_lo <= h_hi) || self.misses(h_lo, h_hi) {
             return;
         }
         // (height, window) of each candidate: the ends, the edge crossings, the poles.
