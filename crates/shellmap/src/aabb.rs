@@ -114,9 +114,28 @@ impl<'a, T: Real> TextureCurve<'a, T> {
         };
         let d = &self.ray.d;
         let q: [T; 3] = core::array::from_fn(|i| (-c).mul_add(d[i], num[i]));
-        let roots = solve_quadratic_in(q, a, b);
         let mut out = [(T::ZERO, T::ZERO); 2];
         let mut n = 0;
+        // Most stretches stay on one side of a split line: the range of q over [a, b] (ends
+        // and vertex), away from 0 by more than the error bound of its coefficients and their
+        // evaluation (the same gamma(8) bound as below, which covers the few roundings of an
+        // evaluation too), has no root, which the solver would confirm at more cost.
+        let x = a.abs().max(b.abs());
+        let margin = self.gamma8 * c.abs().mul_add(quadratic(&self.md, x), quadratic(mag, x));
+        let (qa, qb) = (quadratic(&q, a), quadratic(&q, b));
+        let (mut lo, mut hi) = (qa.min(qb), qa.max(qb));
+        if q[2] != T::ZERO {
+            let vertex = -q[1] / (T::TWO * q[2]);
+            if vertex > a && vertex < b {
+                let qv = quadratic(&q, vertex);
+                lo = lo.min(qv);
+                hi = hi.max(qv);
+            }
+        }
+        if lo > margin || hi < -margin {
+            return (out, 0);
+        }
+        let roots = solve_quadratic_in(q, a, b);
         for &r in roots.iter() {
             let x = r.abs();
             let err = self.gamma8 * c.abs().mul_add(quadratic(&self.md, x), quadratic(mag, x));
