@@ -37,9 +37,9 @@ enum MethodKind {
     TessellationFree,
     /// Geometry-image ray tracing (Carr et al. 2006); height fields on one uv chart only.
     GeometryImage,
-    /// Smooth shell mapping by ray marching (Jeschke et al. 2007); height fields only.
+    /// Smooth shell mapping by ray marching (Jeschke et al. 2007); instanced objects voxelised.
     Marching,
-    /// Ray marching with Jeschke's 3D distance map (sec. 4.4); height fields only.
+    /// Ray marching with Jeschke's 3D distance map (sec. 4.4); instanced objects voxelised.
     DistanceMap,
     /// Tetrahedral shells (piecewise-linear mapping); height fields only.
     Tetrahedra,

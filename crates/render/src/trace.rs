@@ -39,13 +39,13 @@ pub enum Method {
     GeometryImageF64,
     /// Smooth shell mapping by ray marching (Jeschke et al. 2007: canonical-space sampling
     /// with image-space error correction, 2 samples per texel, binary-search refinement) in
-    /// single precision; height fields only.
+    /// single precision; instanced objects are voxelised in their tile (its 3D textures).
     MarchingF32,
     /// Smooth shell mapping by ray marching in double precision.
     MarchingF64,
     /// Ray marching with the 3D distance map of Jeschke et al. 2007, sec. 4.4 (empty-space
-    /// jumps of up to 31 cells; cells of at most 256 per axis and 32 height layers) in single
-    /// precision; height fields only.
+    /// jumps of up to 31 cells; cells of at most 256 per axis and 32 height layers, or per
+    /// voxel of an instanced object) in single precision.
     DistanceMapF32,
     /// Ray marching with the distance map in double precision.
     DistanceMapF64,
