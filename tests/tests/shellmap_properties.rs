@@ -7,7 +7,8 @@ mod common;
 
 use nlrt_poly::{Real, Vector2, Vector3};
 use nlrt_shellmap::{
-    NonlinearRay, Prism, Ray, TexturePlane, intersect_box, intersect_microtriangle, intersect_prism,
+    BaseEdges, NonlinearRay, Prism, Ray, TextureCurve, TexturePlane, intersect_box,
+    intersect_microtriangle, intersect_prism,
 };
 use proptest::prelude::*;
 
@@ -160,6 +161,78 @@ macro_rules! shellmap_properties {
                     if let Some(s) = span {
                         prop_assert!(s.h_in <= s.h_out && s.h_in >= lo[2] && s.h_out <= hi[2]);
                         prop_assert!(grazing || (s.h_in <= h && h <= s.h_out), "span {s:?} misses h = {h}");
+                    }
+                }
+
+                /// The heights at which the ray is inside the prism (the BLAS walk's start) hold
+                /// every sampled height whose point the base-edge test puts inside, and the
+                /// aimed interior point's height; a prism the cheap test rejects has no inside
+                /// sample. 513 samples over [0, 1].
+                #[test]
+                fn prism_stretches_hold_every_inside_height(r in prism_params(), o in prop::array::uniform3(-2.0f64..2.0), target in prop::array::uniform3(0.0f64..1.0)) {
+                    let prism = prism_from::<T>(&r);
+                    let origin = V3::new(T::from_f64(3.0 * o[0]), T::from_f64(3.0 * o[1]), T::from_f64(3.0 + o[2]));
+                    let (a, b) = (0.05 + 0.4 * target[0], 0.05 + 0.4 * target[1]);
+                    let h_aim = T::from_f64(0.05 + 0.9 * target[2]);
+                    let aim = prism.shell_point(T::from_f64(a), T::from_f64(b), h_aim);
+                    let ray = Ray::new(origin, aim - origin).expect("non-degenerate ray");
+                    let nl = NonlinearRay::new(&prism, &ray);
+                    let edges = BaseEdges::new(&nl);
+                    let mut stretches = Vec::new();
+                    edges.stretches(T::ZERO, T::ONE, |lo, hi| stretches.push((lo, hi)));
+                    let held = |h: T| stretches.iter().any(|&(lo, hi)| lo <= h && h <= hi);
+                    prop_assert!(held(h_aim), "aimed height {h_aim} outside {stretches:?}");
+                    let misses = edges.misses(T::ZERO, T::ONE);
+                    prop_assert!(!misses);
+                    for i in 0..=512 {
+                        let h = T::from_f64(f64::from(i) / 512.0);
+                        if edges.contains(h) {
+                            prop_assert!(held(h), "inside at {h}, stretches {stretches:?}");
+                        }
+                    }
+                    // A ray aimed past the prism: whatever the cheap test rejects has no inside
+                    // sample.
+                    let away = prism.shell_point(T::from_f64(a + 1.5), T::from_f64(b + 1.5), h_aim);
+                    let ray = Ray::new(origin, away - origin).expect("non-degenerate ray");
+                    let nl = NonlinearRay::new(&prism, &ray);
+                    let edges = BaseEdges::new(&nl);
+                    if edges.misses(T::ZERO, T::ONE) {
+                        for i in 0..=512 {
+                            prop_assert!(!edges.contains(T::from_f64(f64::from(i) / 512.0)));
+                        }
+                    }
+                }
+
+                /// The split-line crossings of the walk (with their cheap no-crossing test) find
+                /// a root between any two sampled heights where `U - c D` changes sign by more
+                /// than its rounding, for the line through the curve at a random height.
+                #[test]
+                fn split_line_crossings_are_found(r in prism_params(), o in prop::array::uniform3(-2.0f64..2.0), target in prop::array::uniform3(0.0f64..1.0), h in 0.0f64..1.0, axis in 0usize..2) {
+                    let prism = prism_from::<T>(&r);
+                    let origin = V3::new(T::from_f64(o[0]), T::from_f64(o[1]), T::from_f64(3.0 + o[2]));
+                    let aim = prism.shell_point(T::from_f64(target[0] * 0.5), T::from_f64(target[1] * 0.5), T::from_f64(target[2]));
+                    let ray = Ray::new(origin, aim - origin).expect("non-degenerate ray");
+                    let nl = NonlinearRay::new(&prism, &ray);
+                    let curve = TextureCurve::new(&prism, &nl);
+                    let Some(([u, v], _)) = curve.uv_with_error(T::from_f64(h)) else { return Ok(()) };
+                    let c = if axis == 0 { u } else { v };
+                    prop_assume!(c.is_finite());
+                    let (roots, n) = curve.crossings(axis, c, T::ZERO, T::ONE);
+                    let num = if axis == 0 { &nl.u } else { &nl.v };
+                    let q = |h: T| {
+                        let f = |k: &[T; 3]| k[2].mul_add(h, k[1]).mul_add(h, k[0]);
+                        f(num) - c * f(&nl.d)
+                    };
+                    // Sign changes beyond 1e3 u of the terms' size (rounding of a few
+                    // operations on O(1) coefficients is far below it).
+                    let clear = T::from_f64(1e3) * T::UNIT_ROUNDOFF * (T::ONE + c.abs());
+                    let steps = 256;
+                    for i in 0..steps {
+                        let (h0, h1) = (T::from_f64(f64::from(i) / f64::from(steps)), T::from_f64(f64::from(i + 1) / f64::from(steps)));
+                        let (q0, q1) = (q(h0), q(h1));
+                        if (q0 > clear && q1 < -clear) || (q0 < -clear && q1 > clear) {
+                            prop_assert!(roots[..n].iter().any(|&(r, w)| r + w >= h0 && r - w <= h1), "no crossing in [{h0}, {h1}]: {:?}", &roots[..n]);
+                        }
                     }
                 }
 
