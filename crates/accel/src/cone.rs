@@ -569,14 +569,7 @@ impl<T: Real> DisplacedSurface<T> {
                 let uv = prism.texture_uv(a, b);
                 let (_, texel, part) = self.surface_height(uv.x(), uv.y());
                 return Some(SurfaceHit {
-                    hit: Hit {
-                        t: span.t_in + hi,
-                        alpha: a,
-                        beta: b,
-                        h: T::ONE - bent(hi),
-                        u: uv.x(),
-                        v: uv.y(),
-                    },
+                    hit: Hit::at(&prism, span.t_in + hi, a, b, T::ONE - bent(hi)),
                     triangle: tri as u32,
                     texel,
                     part,

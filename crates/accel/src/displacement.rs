@@ -2,7 +2,7 @@
 //! traversed by nonlinear rays (Ogaki 2023, sec. 4.4, 5.1, 5.4).
 
 use core::fmt;
-use nlrt_poly::{Real, Vector2, Vector3};
+use nlrt_poly::{Real, Vector3};
 use nlrt_poly::{horner_with_bound_scaled, solve_cubic_in, solve_quadratic_in};
 use nlrt_shellmap::{
     BaseEdges, Hit, NonlinearRay, Prism, Ray, TexturePlane, alpha_beta_eq11, world_normal,
@@ -342,19 +342,8 @@ impl<T: Real> DisplacedSurface<T> {
             };
             let t = ray.signed_distance(prism, alpha, beta, h);
             if t >= t_min && t <= *t_max {
-                let uv = prism.texture_uv(alpha, beta);
                 *t_max = t;
-                best = Some((
-                    Hit {
-                        t,
-                        alpha,
-                        beta,
-                        h,
-                        u: uv.x(),
-                        v: uv.y(),
-                    },
-                    part,
-                ));
+                best = Some((Hit::at(prism, t, alpha, beta, h), part));
             }
         };
         // Where the piece around `h` lies: None outside the texel, else Some(lower side).

@@ -163,14 +163,7 @@ impl<T: Real> DisplacedSurface<T> {
         let uv = prism.texture_uv(c[0], c[1]);
         let (_, texel, part) = self.surface_height(uv.x(), uv.y());
         SurfaceHit {
-            hit: Hit {
-                t,
-                alpha: c[0],
-                beta: c[1],
-                h: c[2],
-                u: uv.x(),
-                v: uv.y(),
-            },
+            hit: Hit::at(prism, t, c[0], c[1], c[2]),
             triangle: tri as u32,
             texel,
             part,

@@ -331,16 +331,8 @@ impl<T: Real> ShellSurface<T> {
                 }
                 let [x, y, z] = medium.voxel(prism, &c);
                 let res = voxels.res as i64;
-                let uv = prism.texture_uv(c[0], c[1]);
                 let hit = ShellHit {
-                    hit: Hit {
-                        t,
-                        alpha: c[0],
-                        beta: c[1],
-                        h: c[2],
-                        u: uv.x(),
-                        v: uv.y(),
-                    },
+                    hit: Hit::at(prism, t, c[0], c[1], c[2]),
                     triangle: tri as u32,
                     tile: [x.div_euclid(res) as i32, y.div_euclid(res) as i32],
                     object_triangle: voxels.triangle_at(x, y, z)?,

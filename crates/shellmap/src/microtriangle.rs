@@ -77,6 +77,24 @@ pub struct Hit<T: Real> {
     pub v: T,
 }
 
+impl<T: Real> Hit<T> {
+    /// The hit at distance `t` on the canonical point `(alpha, beta, h)` of `prism`, with its
+    /// texture coordinates.
+    #[must_use]
+    #[inline]
+    pub fn at(prism: &Prism<T>, t: T, alpha: T, beta: T, h: T) -> Self {
+        let uv = prism.texture_uv(alpha, beta);
+        Self {
+            t,
+            alpha,
+            beta,
+            h,
+            u: nlrt_poly::Vector2::x(uv),
+            v: nlrt_poly::Vector2::y(uv),
+        }
+    }
+}
+
 /// `(alpha, beta)` at height `h` from the two of Eq. 11's three linear equations whose 2x2
 /// determinant is largest in magnitude: the two rows of Eq. 6 and the plane in canonical space
 /// (Eq. 10). Eq. 6 alone fails where its determinant vanishes (e.g. `h_in = h_out`, Fig. 5).
