@@ -16,6 +16,7 @@ use nlrt_shellmap::{Prism, Ray};
 
 use crate::bvh::{SlabRay, ray_triangle};
 use crate::cells::{facing_unit, traverse_cells, uv_in_cells};
+use crate::displacement::CellTriangle;
 use crate::displacement::{DisplacedSurface, TexelPart, TraversalStats};
 
 /// A hit of [`DisplacedSurface::intersect_affine`]: a flat world-space microtriangle.
@@ -205,7 +206,7 @@ impl<T: Real> DisplacedSurface<T> {
                 let mut best = None;
                 traverse_cells(
                     self.prisms.roots(tri),
-                    uv,
+                    &CellTriangle::new(uv),
                     t_max,
                     stats,
                     |level, x, y, t_max| {

@@ -9,7 +9,7 @@ use nlrt_shellmap::{BaseEdges, NonlinearRay, Prism, Ray, TextureCurve, intersect
 
 use crate::bvh::{Bvh4, SlabRay};
 use crate::displacement::{
-    MAX_TEXEL_COORDINATE, RootNodes, TraversalStats, root_nodes, square_meets_triangle,
+    CellTriangle, MAX_TEXEL_COORDINATE, RootNodes, TraversalStats, root_nodes,
 };
 use crate::mesh::{BaseMesh, prism_bounds};
 
@@ -184,7 +184,7 @@ const STACK: usize = 4 + 3 * MAX_ROOT_LEVEL;
 /// a hit nearer than `t_max`.
 pub(crate) fn traverse_cells<T: Real>(
     root: RootNodes,
-    uv_tri: [[T; 2]; 3],
+    uv_tri: &CellTriangle<T>,
     mut t_max: T,
     stats: &mut TraversalStats,
     node_entry: impl Fn(u32, i32, i32, T) -> Option<T>,
@@ -220,7 +220,7 @@ pub(crate) fn traverse_cells<T: Real>(
             }
             let lo = [T::from_f64(cx0 as f64), T::from_f64(cy0 as f64)];
             let hi = [T::from_f64((cx0 + k) as f64), T::from_f64((cy0 + k) as f64)];
-            if !square_meets_triangle(lo, hi, &uv_tri) {
+            if !uv_tri.meets_square(lo, hi) {
                 continue;
             }
             stats.box_tests += 1;
@@ -356,7 +356,7 @@ pub(crate) fn traverse_curve_cells<T: Real>(
     curve: &TextureCurve<'_, T>,
     edges: &BaseEdges<T>,
     cell_size: T,
-    uv_tri: [[T; 2]; 3],
+    uv_tri: &CellTriangle<T>,
     t_min: T,
     t_max: &mut T,
     stats: &mut TraversalStats,
@@ -376,7 +376,7 @@ pub(crate) fn traverse_curve_cells<T: Real>(
         }
         let lo = [T::from_f64(cx0 as f64), T::from_f64(cy0 as f64)];
         let hi = [T::from_f64((cx0 + k) as f64), T::from_f64((cy0 + k) as f64)];
-        square_meets_triangle(lo, hi, &uv_tri)
+        uv_tri.meets_square(lo, hi)
     };
     // Sorted insertion, nearest first (few entries); false when full.
     let insert = |found: &mut [Stretch<T>], n: &mut usize, s: Stretch<T>| -> bool {
@@ -585,7 +585,7 @@ pub(crate) fn walk_cells<T: Real, const STACK_LEN: usize>(
     node_heights: impl Fn(u32, i32, i32) -> [T; 2],
     mut leaf: impl FnMut(i32, i32, T, &mut TraversalStats) -> Option<T>,
 ) {
-    let uv_tri = uv_in_cells(prism, cell_size);
+    let uv_tri = CellTriangle::new(uv_in_cells(prism, cell_size));
     let curve = TextureCurve::new(prism, ray);
     let mut t = t_max;
     let mut stack = [Stretch::empty(); STACK_LEN];
@@ -595,7 +595,7 @@ pub(crate) fn walk_cells<T: Real, const STACK_LEN: usize>(
         &curve,
         edges,
         cell_size,
-        uv_tri,
+        &uv_tri,
         t_min,
         &mut t,
         stats,
@@ -606,7 +606,7 @@ pub(crate) fn walk_cells<T: Real, const STACK_LEN: usize>(
         stats.fallbacks += 1;
         traverse_cells(
             root,
-            uv_tri,
+            &uv_tri,
             t,
             stats,
             |level, x, y, t_max| {

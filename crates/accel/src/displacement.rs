@@ -629,43 +629,67 @@ pub(crate) fn root_nodes(lo: [f64; 2], hi: [f64; 2]) -> RootNodes {
     }
 }
 
-/// Whether the axis-aligned square `[lo, hi]` may meet the triangle `tri` (separating axis
-/// test over the triangle's three edge normals; the box axes are covered by the root's texel
-/// range). Conservative: a separation is accepted only beyond a bound on the rounding error
-/// of the projections (`gamma(5)` times the sum of the magnitudes of their terms), so a square
-/// touching the triangle within rounding is kept. Degenerate triangles (a line or a point in
-/// uv) keep every square that the texel range allows along their degenerate direction.
-pub(crate) fn square_meets_triangle<T: Real>(lo: [T; 2], hi: [T; 2], tri: &[[T; 2]; 3]) -> bool {
-    let five_u = T::from_i32(5) * T::UNIT_ROUNDOFF;
-    let gamma5 = five_u / (T::ONE - five_u);
-    for i in 0..3 {
-        let (a, b, c) = (tri[i], tri[(i + 1) % 3], tri[(i + 2) % 3]);
-        let n = [a[1] - b[1], b[0] - a[0]];
-        let side = n[0] * (c[0] - a[0]) + n[1] * (c[1] - a[1]);
-        let side_err = gamma5 * ((n[0] * (c[0] - a[0])).abs() + (n[1] * (c[1] - a[1])).abs());
-        if !(side.abs() > side_err) {
-            continue; // degenerate: this edge cannot separate
-        }
-        let s = if side > T::ZERO { T::ONE } else { -T::ONE };
-        let mut separated = true;
-        for corner in [
-            [lo[0], lo[1]],
-            [hi[0], lo[1]],
-            [lo[0], hi[1]],
-            [hi[0], hi[1]],
-        ] {
-            let (p0, p1) = (n[0] * (corner[0] - a[0]), n[1] * (corner[1] - a[1]));
-            let d = (p0 + p1) * s;
-            if !(d < -gamma5 * (p0.abs() + p1.abs())) {
-                separated = false;
-                break;
+/// A base triangle's uv triangle in cell units, set up for [`CellTriangle::meets_square`]:
+/// per edge its normal, a point on it and the side the triangle lies on (computed once per
+/// prism, not per node of the walk).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct CellTriangle<T> {
+    /// Per edge: a point on it, its normal scaled by the side of the opposite corner;
+    /// `None` for an edge that cannot separate (degenerate triangle).
+    edges: [Option<([T; 2], [T; 2])>; 3],
+}
+
+impl<T: Real> CellTriangle<T> {
+    /// Sets up the triangle `tri` (cell units).
+    pub(crate) fn new(tri: [[T; 2]; 3]) -> Self {
+        let gamma5 = gamma5::<T>();
+        let edges = core::array::from_fn(|i| {
+            let (a, b, c) = (tri[i], tri[(i + 1) % 3], tri[(i + 2) % 3]);
+            let n = [a[1] - b[1], b[0] - a[0]];
+            let (p0, p1) = (n[0] * (c[0] - a[0]), n[1] * (c[1] - a[1]));
+            let side = p0 + p1;
+            // Degenerate within rounding: this edge cannot separate.
+            if !(side.abs() > gamma5 * (p0.abs() + p1.abs())) {
+                return None;
             }
-        }
-        if separated {
-            return false;
-        }
+            let n = if side > T::ZERO { n } else { [-n[0], -n[1]] };
+            Some((a, n))
+        });
+        Self { edges }
     }
-    true
+
+    /// Whether the axis-aligned square `[lo, hi]` may meet the triangle (separating axis
+    /// test over the triangle's three edge normals; the box axes are covered by the root's
+    /// texel range). Conservative: a separation is accepted only beyond a bound on the
+    /// rounding error of the projections (`gamma(5)` times the sum of the magnitudes of their
+    /// terms), so a square touching the triangle within rounding is kept. Degenerate
+    /// triangles (a line or a point in uv) keep every square that the texel range allows
+    /// along their degenerate direction.
+    #[inline]
+    pub(crate) fn meets_square(&self, lo: [T; 2], hi: [T; 2]) -> bool {
+        let gamma5 = gamma5::<T>();
+        !self.edges.iter().flatten().any(|&(a, n)| {
+            [
+                [lo[0], lo[1]],
+                [hi[0], lo[1]],
+                [lo[0], hi[1]],
+                [hi[0], hi[1]],
+            ]
+            .iter()
+            .all(|corner| {
+                let (p0, p1) = (n[0] * (corner[0] - a[0]), n[1] * (corner[1] - a[1]));
+                p0 + p1 < -gamma5 * (p0.abs() + p1.abs())
+            })
+        })
+    }
+}
+
+/// `gamma(5) = 5u / (1 - 5u)`: the relative error bound of the projections of
+/// [`CellTriangle`] (a difference, two products, a sum).
+#[inline(always)]
+fn gamma5<T: Real>() -> T {
+    let five_u = T::from_i32(5) * T::UNIT_ROUNDOFF;
+    five_u / (T::ONE - five_u)
 }
 
 impl<T: Real> DisplacedSurface<T> {
@@ -683,6 +707,64 @@ mod tests {
     use alloc::vec;
     use alloc::vec::Vec;
     use nlrt_poly::glam::{DVec2, DVec3};
+
+    /// The uv-triangle test of the walk keeps every square that holds a point of the
+    /// triangle (sampled on a fine grid, squares touching it included) and drops squares
+    /// clearly apart from it; a degenerate triangle (a segment) drops nothing that the
+    /// segment's line meets.
+    #[test]
+    fn squares_meeting_the_uv_triangle_are_kept() {
+        let triangles = [
+            [[0.3, 0.2], [7.6, 1.1], [2.5, 6.8]],
+            [[5.0, 5.0], [1.0, 6.0], [6.5, 0.5]],
+            [[0.0, 0.0], [8.0, 0.0], [0.0, 8.0]],
+            [[1.0, 1.0], [7.0, 7.0], [4.0, 4.0]], // a segment
+        ];
+        for tri in triangles {
+            let cells = CellTriangle::new(tri);
+            let inside = |p: [f64; 2]| {
+                let [a, b, c] = tri;
+                let cross = |u: [f64; 2], v: [f64; 2]| {
+                    (v[0] - u[0]) * (p[1] - u[1]) - (v[1] - u[1]) * (p[0] - u[0])
+                };
+                let (d0, d1, d2) = (cross(a, b), cross(b, c), cross(c, a));
+                (d0 >= 0.0 && d1 >= 0.0 && d2 >= 0.0) || (d0 <= 0.0 && d1 <= 0.0 && d2 <= 0.0)
+            };
+            let (mut kept, mut dropped) = (0, 0);
+            for y in -2..10 {
+                for x in -2..10 {
+                    let (lo, hi) = (
+                        [f64::from(x), f64::from(y)],
+                        [f64::from(x + 1), f64::from(y + 1)],
+                    );
+                    let touched = (0..=16).any(|j| {
+                        (0..=16).any(|i| {
+                            inside([lo[0] + f64::from(i) / 16.0, lo[1] + f64::from(j) / 16.0])
+                        })
+                    });
+                    let meets = cells.meets_square(lo, hi);
+                    assert!(meets || !touched, "{tri:?}: square {lo:?} holds a point");
+                    // All four corners clearly beyond one edge's line (away from the third
+                    // vertex): that edge separates, so the square must go. (Squares apart
+                    // only along a box axis are left to the root's texel range.)
+                    let corners = [lo, [hi[0], lo[1]], [lo[0], hi[1]], hi];
+                    let beyond_an_edge = (0..3).any(|e| {
+                        let (a, b, c) = (tri[e], tri[(e + 1) % 3], tri[(e + 2) % 3]);
+                        let side = |p: [f64; 2]| {
+                            (b[0] - a[0]) * (p[1] - a[1]) - (b[1] - a[1]) * (p[0] - a[0])
+                        };
+                        let s = side(c);
+                        s != 0.0 && corners.iter().all(|&p| side(p) * s.signum() < -0.01)
+                    });
+                    if beyond_an_edge {
+                        assert!(!meets, "{tri:?}: square {lo:?} is beyond an edge");
+                    }
+                    if meets { kept += 1 } else { dropped += 1 }
+                }
+            }
+            assert!(kept > 0 && (dropped > 0 || tri[2] == [4.0, 4.0]), "{tri:?}");
+        }
+    }
 
     /// A walk whose stack is too small for its pieces gives up and finishes the triangle by
     /// box tests: the same nearest hits as the full walk and as testing every texel, and the

@@ -161,7 +161,9 @@ impl HeightField {
     fn wrap_index(&self, i: i64) -> usize {
         let n = self.side as i64;
         match self.wrap {
-            Wrap::Repeat => i.rem_euclid(n) as usize,
+            // `side` is a power of two: the mask is `rem_euclid` (two's complement) without
+            // a division, which the walk would pay per sample read.
+            Wrap::Repeat => (i & (n - 1)) as usize,
             Wrap::Clamp => i.clamp(0, n - 1) as usize,
         }
     }
@@ -213,7 +215,8 @@ impl HeightField {
             l if l <= self.log2_side && self.wrap == Wrap::Repeat => {
                 let n = (self.side >> l) as i64;
                 let row = &self.pyramid[l as usize - 2];
-                row[(y.rem_euclid(n) * n + x.rem_euclid(n)) as usize]
+                // A power of two: masks wrap like `rem_euclid`.
+                row[((y & (n - 1)) * n + (x & (n - 1))) as usize]
             }
             l if l <= self.log2_side => {
                 // Clamp: a node inside the tile is stored; outside it only edge samples are
@@ -398,6 +401,40 @@ mod tests {
                             assert_eq!(b, t, "{wrap:?} {level} {x} {y}: stored bounds are exact");
                         }
                     }
+                }
+            }
+        }
+    }
+
+    /// Repeat reads the sample of the tile's copy the corner lies in, for negative and far
+    /// corners too (the index is a mask, which must agree with `rem_euclid`); Clamp reads the
+    /// nearest edge sample.
+    #[test]
+    fn samples_wrap_like_the_repeated_or_clamped_tile() {
+        let side = 8i64;
+        let values = pseudo_random(8, 11);
+        for wrap in [Wrap::Repeat, Wrap::Clamp] {
+            let f = HeightField::new(8, values.clone(), wrap).unwrap();
+            for j in [
+                -3 * side - 1,
+                -side,
+                -5,
+                -1,
+                0,
+                3,
+                7,
+                8,
+                13,
+                5 * side + 2,
+                1 << 40,
+            ] {
+                for i in [-(1 << 40) - 3, -2 * side + 1, -1, 0, 6, 9, 4 * side - 1] {
+                    let index = |c: i64| match wrap {
+                        Wrap::Repeat => c.rem_euclid(side),
+                        Wrap::Clamp => c.clamp(0, side - 1),
+                    };
+                    let expected = values[(index(j) * side + index(i)) as usize];
+                    assert_eq!(f.sample(i, j), expected, "{wrap:?} ({i}, {j})");
                 }
             }
         }
