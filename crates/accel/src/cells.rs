@@ -321,9 +321,8 @@ pub(crate) const CURVE_STACK: usize = 48;
 /// texture-space curve, nearest first (the BLAS traversal of Ogaki 2023, sec. 4.4, without a
 /// box test per node).
 ///
-/// It starts from the heights at which the ray is inside the prism ([`BaseEdges::stretches`],
-/// cut to the roots' height bounds from `node_heights(level, x, y)`; no separate ray-prism
-/// test is needed). A node's stretch is cut where the curve crosses the node's two split lines
+/// It starts from the heights at which the ray is inside the prism ([`BaseEdges::stretches`]
+/// on `root_heights`, the roots' height bounds; no separate ray-prism test is needed). A node's stretch is cut where the curve crosses the node's two split lines
 /// (the roots of two quadratics on the stretch's height interval,
 /// [`TextureCurve::crossings`]); between two cuts the curve stays on one side of each line,
 /// so whatever of the piece lies in the node's square lies in one child, found from the
@@ -353,6 +352,7 @@ pub(crate) const CURVE_STACK: usize = 48;
 pub(crate) fn traverse_curve_cells<T: Real>(
     stack: &mut [Stretch<T>],
     root: RootNodes,
+    root_heights: [T; 2],
     curve: &TextureCurve<'_, T>,
     edges: &BaseEdges<T>,
     cell_size: T,
@@ -473,14 +473,7 @@ pub(crate) fn traverse_curve_cells<T: Real>(
         // The ray inside the prism (the curve inside the base triangle, its ends widened as
         // the texel test widens them) at the roots' heights, as stretches of a virtual node
         // whose children are the roots, in order of entry distance.
-        let (mut h_lo, mut h_hi) = (T::INFINITY, T::NEG_INFINITY);
-        for j in 0..i32::from(root.ny) {
-            for i in 0..i32::from(root.nx) {
-                let [lo, hi] = node_heights(root.level, root.x + i, root.y + j);
-                h_lo = h_lo.min(lo);
-                h_hi = h_hi.max(hi);
-            }
-        }
+        let [h_lo, h_hi] = root_heights;
         let mut roots = [(empty, T::ZERO); 4];
         let mut n = 0;
         let mut complete = true;
@@ -585,6 +578,19 @@ pub(crate) fn walk_cells<T: Real, const STACK_LEN: usize>(
     node_heights: impl Fn(u32, i32, i32) -> [T; 2],
     mut leaf: impl FnMut(i32, i32, T, &mut TraversalStats) -> Option<T>,
 ) {
+    // The roots' heights, and the cheap rejection of a prism the ray misses (most of the
+    // overlapping boxes of a thick shell's prisms) before anything else is set up.
+    let (mut h_lo, mut h_hi) = (T::INFINITY, T::NEG_INFINITY);
+    for j in 0..i32::from(root.ny) {
+        for i in 0..i32::from(root.nx) {
+            let [lo, hi] = node_heights(root.level, root.x + i, root.y + j);
+            h_lo = h_lo.min(lo);
+            h_hi = h_hi.max(hi);
+        }
+    }
+    if !(h_lo <= h_hi) || edges.misses(h_lo, h_hi) {
+        return;
+    }
     let uv_tri = CellTriangle::new(uv_in_cells(prism, cell_size));
     let curve = TextureCurve::new(prism, ray);
     let mut t = t_max;
@@ -592,6 +598,7 @@ pub(crate) fn walk_cells<T: Real, const STACK_LEN: usize>(
     let complete = traverse_curve_cells(
         &mut stack,
         root,
+        [h_lo, h_hi],
         &curve,
         edges,
         cell_size,
