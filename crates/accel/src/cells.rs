@@ -341,8 +341,9 @@ pub(crate) const CURVE_STACK: usize = 48;
 /// `t_min`, a stretch is skipped when the distances at its ends are both beyond `t_max` or
 /// both before `t_min` (as in the box test, exact where the shell does not fold, a sample
 /// where it does). Cells whose square misses the triangle's uv triangle `uv_tri` (in cell
-/// units) are skipped; `leaf(x, y, t_max, stats)` tests a cell and returns the distance of a
-/// hit nearer than `t_max`.
+/// units) are skipped; `leaf(x, y, h, t_max, stats)` tests a cell and returns the distance of
+/// a hit nearer than `t_max`; `h` holds every height at which this piece of the curve is in
+/// the cell and in the prism (a cell met by several pieces is called once per piece).
 ///
 /// Returns `false` when a node produced more pieces than the fixed stack holds (only
 /// possible for curves running within rounding of many split lines at once): the caller then
@@ -361,7 +362,7 @@ pub(crate) fn traverse_curve_cells<T: Real>(
     t_max: &mut T,
     stats: &mut TraversalStats,
     node_heights: impl Fn(u32, i32, i32) -> [T; 2],
-    mut leaf: impl FnMut(i32, i32, T, &mut TraversalStats) -> Option<T>,
+    mut leaf: impl FnMut(i32, i32, [T; 2], T, &mut TraversalStats) -> Option<T>,
 ) -> bool {
     let empty = Stretch::empty();
     let mut depth = 0;
@@ -535,7 +536,7 @@ pub(crate) fn traverse_curve_cells<T: Real>(
             continue;
         }
         if node.level == 0 {
-            if let Some(t) = leaf(node.x, node.y, *t_max, stats) {
+            if let Some(t) = leaf(node.x, node.y, node.h, *t_max, stats) {
                 *t_max = t;
             }
             continue;
@@ -564,7 +565,8 @@ pub(crate) fn traverse_curve_cells<T: Real>(
 /// The nonlinear BLAS walk of one base triangle shared by displacement and shell mapping:
 /// [`traverse_curve_cells`], finished by the box-test traversal [`traverse_cells`] in the
 /// rare case it gives up. `node_heights(level, x, y)` bounds the heights of a node's
-/// content; `leaf` as in [`traverse_cells`].
+/// content; `leaf(x, y, h, t_max, stats)` as in [`traverse_curve_cells`] (after a fallback
+/// `h` is every height).
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn walk_cells<T: Real, const STACK_LEN: usize>(
     root: RootNodes,
@@ -576,7 +578,7 @@ pub(crate) fn walk_cells<T: Real, const STACK_LEN: usize>(
     t_max: T,
     stats: &mut TraversalStats,
     node_heights: impl Fn(u32, i32, i32) -> [T; 2],
-    mut leaf: impl FnMut(i32, i32, T, &mut TraversalStats) -> Option<T>,
+    mut leaf: impl FnMut(i32, i32, [T; 2], T, &mut TraversalStats) -> Option<T>,
 ) {
     // The roots' heights, and the cheap rejection of a prism the ray misses (most of the
     // overlapping boxes of a thick shell's prisms) before anything else is set up.
@@ -620,7 +622,7 @@ pub(crate) fn walk_cells<T: Real, const STACK_LEN: usize>(
                 let h = node_heights(level, x, y);
                 texture_box_entry(prism, ray, cell_size, (level, x, y), h, t_min, t_max)
             },
-            leaf,
+            |x, y, t_max, stats| leaf(x, y, [T::NEG_INFINITY, T::INFINITY], t_max, stats),
         );
     }
 }

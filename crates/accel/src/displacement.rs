@@ -504,7 +504,7 @@ impl<T: Real> DisplacedSurface<T> {
                 let [lo, hi] = self.field.texel_bounds(level, i64::from(x), i64::from(y));
                 [Self::height(lo), Self::height(hi)]
             },
-            |x, y, t_max, stats| {
+            |x, y, _, t_max, stats| {
                 stats.texel_tests += 1;
                 let (hit, part) = self.texel_hit(prism, ray, &edges, x, y, t_min, t_max)?;
                 best = Some(SurfaceHit {

@@ -8,7 +8,7 @@ use alloc::vec::Vec;
 use core::fmt;
 use nlrt_poly::{Real, Vector3};
 use nlrt_shellmap::{
-    BaseEdges, Hit, NonlinearRay, Prism, Ray, TexturePlane, intersect_box, intersect_microtriangle,
+    BaseEdges, Hit, NonlinearRay, Prism, Ray, TextureCurve, TexturePlane, intersect_microtriangle,
     world_normal,
 };
 
@@ -216,15 +216,18 @@ impl<T: Real> ShellSurface<T> {
         intersect_microtriangle(prism, ray, &tri, lo, hi, t_min, t_max)
     }
 
-    /// The object's BVH in tile `(x, y)`, nearest first; updates `best`.
+    /// The object's BVH in tile `(x, y)`, nearest first, its boxes cut to the heights `h` at
+    /// which the ray's curve is in the tile (from the walk: a box's part outside them is
+    /// outside the tile or the prism, so the box test's cheap interval rejection sees only the
+    /// short stretch of curve that matters); updates `best`.
     #[allow(clippy::too_many_arguments)]
     fn intersect_tile(
         &self,
         tri: usize,
         prism: &Prism<T>,
         ray: &NonlinearRay<T>,
-        x: i32,
-        y: i32,
+        (x, y): (i32, i32),
+        [h_in, h_out]: [T; 2],
         t_min: T,
         t_max: &mut T,
         best: &mut Option<ShellHit<T>>,
@@ -236,6 +239,7 @@ impl<T: Real> ShellSurface<T> {
             return;
         }
         let (dx, dy) = (T::from_i32(x), T::from_i32(y));
+        let curve = TextureCurve::new(prism, ray);
         let mut stack = [(0u32, T::ZERO); OBJECT_STACK];
         let mut depth = 1;
         stack[0] = (0, t_min);
@@ -254,9 +258,9 @@ impl<T: Real> ShellSurface<T> {
                 }
                 let b = &node.bounds[c];
                 stats.box_tests += 1;
-                let lo = [b.lo[0] + dx, b.lo[1] + dy, b.lo[2]];
-                let hi = [b.hi[0] + dx, b.hi[1] + dy, b.hi[2]];
-                if let Some(span) = intersect_box(prism, ray, lo, hi, t_min, *t_max) {
+                let lo = [b.lo[0] + dx, b.lo[1] + dy, b.lo[2].max(h_in)];
+                let hi = [b.hi[0] + dx, b.hi[1] + dy, b.hi[2].min(h_out)];
+                if let Some(span) = curve.box_span(lo, hi, t_min, *t_max) {
                     let mut i = n;
                     while i > 0 && found[i - 1].0 > span.t_in {
                         found[i] = found[i - 1];
@@ -316,9 +320,9 @@ impl<T: Real> ShellSurface<T> {
             t_max,
             stats,
             |_, _, _| [h_lo, h_hi],
-            |x, y, t_max, stats| {
+            |x, y, h, t_max, stats| {
                 let mut t = t_max;
-                self.intersect_tile(tri, prism, ray, x, y, t_min, &mut t, &mut best, stats);
+                self.intersect_tile(tri, prism, ray, (x, y), h, t_min, &mut t, &mut best, stats);
                 (t < t_max).then_some(t)
             },
         );

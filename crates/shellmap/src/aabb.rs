@@ -151,6 +151,21 @@ impl<'a, T: Real> TextureCurve<'a, T> {
         (out, n)
     }
 
+    /// [`intersect_box`] on this curve: the hull of [`TextureCurve::box_pieces`] (for many
+    /// boxes tested along one curve, which set up their error bounds once).
+    #[must_use]
+    pub fn box_span(&self, lo: [T; 3], hi: [T; 3], t_min: T, t_max: T) -> Option<BoxSpan<T>> {
+        let mut span: Option<BoxSpan<T>> = None;
+        self.box_pieces(lo, hi, t_min, t_max, |p| {
+            let s = span.get_or_insert(p);
+            s.h_in = s.h_in.min(p.h_in);
+            s.h_out = s.h_out.max(p.h_out);
+            s.t_in = s.t_in.min(p.t_in);
+            s.t_out = s.t_out.max(p.t_out);
+        });
+        span
+    }
+
     /// Calls `piece` for each stretch of the curve inside the texture-space box `lo..=hi`
     /// (each `(u, v, h)`) whose distances along the world ray meet `[t_min, t_max]`: its
     /// heights `h_in..=h_out` and distances `t_in..=t_out` (clamped to `[t_min, t_max]`).
@@ -344,13 +359,5 @@ pub fn intersect_box<T: Real>(
     t_min: T,
     t_max: T,
 ) -> Option<BoxSpan<T>> {
-    let mut span: Option<BoxSpan<T>> = None;
-    TextureCurve::new(prism, ray).box_pieces(lo, hi, t_min, t_max, |p| {
-        let s = span.get_or_insert(p);
-        s.h_in = s.h_in.min(p.h_in);
-        s.h_out = s.h_out.max(p.h_out);
-        s.t_in = s.t_in.min(p.t_in);
-        s.t_out = s.t_out.max(p.t_out);
-    });
-    span
+    TextureCurve::new(prism, ray).box_span(lo, hi, t_min, t_max)
 }
