@@ -3,7 +3,7 @@
 
 use crate::prism::Prism;
 use crate::ray::NonlinearRay;
-use nlrt_poly::{Real, Vector2, solve_quadratic_in};
+use nlrt_poly::{Real, Roots, Vector2, solve_quadratic_in};
 
 /// Where a nonlinear ray is inside a texture-space box: the range of heights and the range of
 /// distances along the world ray that the accelerators use for ordering and range reduction.
@@ -116,23 +116,7 @@ impl<'a, T: Real> TextureCurve<'a, T> {
         let q: [T; 3] = core::array::from_fn(|i| (-c).mul_add(d[i], num[i]));
         let mut out = [(T::ZERO, T::ZERO); 2];
         let mut n = 0;
-        // Most stretches stay on one side of a split line: the range of q over [a, b] (ends
-        // and vertex), away from 0 by more than the error bound of its coefficients and their
-        // evaluation (the same gamma(8) bound as below, which covers the few roundings of an
-        // evaluation too), has no root, which the solver would confirm at more cost.
-        let x = a.abs().max(b.abs());
-        let margin = self.gamma8 * c.abs().mul_add(quadratic(&self.md, x), quadratic(mag, x));
-        let (qa, qb) = (quadratic(&q, a), quadratic(&q, b));
-        let (mut lo, mut hi) = (qa.min(qb), qa.max(qb));
-        if q[2] != T::ZERO {
-            let vertex = -q[1] / (T::TWO * q[2]);
-            if vertex > a && vertex < b {
-                let qv = quadratic(&q, vertex);
-                lo = lo.min(qv);
-                hi = hi.max(qv);
-            }
-        }
-        if lo > margin || hi < -margin {
+        if !self.may_vanish(&q, mag, c, a, b) {
             return (out, 0);
         }
         let roots = solve_quadratic_in(q, a, b);
@@ -164,6 +148,29 @@ impl<'a, T: Real> TextureCurve<'a, T> {
             s.t_out = s.t_out.max(p.t_out);
         });
         span
+    }
+
+    /// Whether `q = N - c D` (`N` the curve's `U` or `V`, with coefficient magnitudes `mag`)
+    /// may vanish on `[a, b]`. Most stretches of curve stay on one side of a line: the range
+    /// of `q` over `[a, b]` (ends and vertex), away from 0 by more than the error bound of its
+    /// coefficients and their evaluation (the gamma(8) bound of [`TextureCurve::crossings`],
+    /// which also exceeds the bound by which the solver would report an end of `[a, b]` as a
+    /// root), has no root, which the solver would confirm at more cost.
+    #[inline]
+    fn may_vanish(&self, q: &[T; 3], mag: &[T; 3], c: T, a: T, b: T) -> bool {
+        let x = a.abs().max(b.abs());
+        let margin = self.gamma8 * c.abs().mul_add(quadratic(&self.md, x), quadratic(mag, x));
+        let (qa, qb) = (quadratic(q, a), quadratic(q, b));
+        let (mut lo, mut hi) = (qa.min(qb), qa.max(qb));
+        if q[2] != T::ZERO {
+            let vertex = -q[1] / (T::TWO * q[2]);
+            if vertex > a && vertex < b {
+                let qv = quadratic(q, vertex);
+                lo = lo.min(qv);
+                hi = hi.max(qv);
+            }
+        }
+        !(lo > margin || hi < -margin)
     }
 
     /// Calls `piece` for each stretch of the curve inside the texture-space box `lo..=hi`
@@ -206,7 +213,8 @@ impl<'a, T: Real> TextureCurve<'a, T> {
         let (d_lo, d_hi) = range(&ray.d);
         let h_abs = h_lo.abs().max(h_hi.abs());
         let d_err = gamma8 * quadratic(&self.md, h_abs);
-        if d_lo - d_err > T::ZERO || d_hi + d_err < T::ZERO {
+        let d_keeps_sign = d_lo - d_err > T::ZERO || d_hi + d_err < T::ZERO;
+        if d_keeps_sign {
             let (d_min, d_max) = if d_lo > T::ZERO {
                 (d_lo - d_err, d_hi + d_err)
             } else {
@@ -251,18 +259,27 @@ impl<'a, T: Real> TextureCurve<'a, T> {
         push(h_hi);
         let d = &ray.d;
         let faces = [
-            (&ray.u, lo[0]),
-            (&ray.u, hi[0]),
-            (&ray.v, lo[1]),
-            (&ray.v, hi[1]),
+            (&ray.u, &self.mu, lo[0]),
+            (&ray.u, &self.mu, hi[0]),
+            (&ray.v, &self.mv, lo[1]),
+            (&ray.v, &self.mv, hi[1]),
         ];
-        for (num, face) in faces {
+        for (num, mag, face) in faces {
             let q = core::array::from_fn(|i| (-face).mul_add(d[i], num[i]));
+            // A face the curve cannot reach on [h_lo, h_hi] has no root there to solve for.
+            if !self.may_vanish(&q, mag, face, h_lo, h_hi) {
+                continue;
+            }
             for &h in solve_quadratic_in(q, h_lo, h_hi).iter() {
                 push(h);
             }
         }
-        let poles = solve_quadratic_in(*d, h_lo, h_hi);
+        // Where D keeps its sign by more than its error bound (checked above), no pole.
+        let poles = if d_keeps_sign {
+            Roots::none()
+        } else {
+            solve_quadratic_in(*d, h_lo, h_hi)
+        };
         for &h in poles.iter() {
             push(h);
         }
