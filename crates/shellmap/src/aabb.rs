@@ -3,7 +3,7 @@
 
 use crate::prism::Prism;
 use crate::ray::NonlinearRay;
-use nlrt_poly::{Real, Roots, Vector2, solve_quadratic_in};
+use nlrt_poly::{Real, Roots, Vector2, quadratic_range, solve_quadratic_in};
 
 /// Where a nonlinear ray is inside a texture-space box: the range of heights and the range of
 /// distances along the world ray that the accelerators use for ordering and range reduction.
@@ -160,16 +160,7 @@ impl<'a, T: Real> TextureCurve<'a, T> {
     fn may_vanish(&self, q: &[T; 3], mag: &[T; 3], c: T, a: T, b: T) -> bool {
         let x = a.abs().max(b.abs());
         let margin = self.gamma8 * c.abs().mul_add(quadratic(&self.md, x), quadratic(mag, x));
-        let (qa, qb) = (quadratic(q, a), quadratic(q, b));
-        let (mut lo, mut hi) = (qa.min(qb), qa.max(qb));
-        if q[2] != T::ZERO {
-            let vertex = -q[1] / (T::TWO * q[2]);
-            if vertex > a && vertex < b {
-                let qv = quadratic(q, vertex);
-                lo = lo.min(qv);
-                hi = hi.max(qv);
-            }
-        }
+        let (lo, hi) = quadratic_range(q, a, b);
         !(lo > margin || hi < -margin)
     }
 
@@ -198,18 +189,7 @@ impl<'a, T: Real> TextureCurve<'a, T> {
         // division where D keeps one sign, widened by the same rounding bound as the exact
         // test below. Sound (never rejects what the exact test keeps) and cheap; most boxes
         // of a traversal are rejected here without solving a quadratic.
-        let range = |c: &[T; 3]| {
-            let at = |h: T| quadratic(c, h);
-            let (mut lo_q, mut hi_q) = (at(h_lo).min(at(h_hi)), at(h_lo).max(at(h_hi)));
-            if c[2] != T::ZERO {
-                let vertex = -c[1] / (T::TWO * c[2]);
-                if vertex > h_lo && vertex < h_hi {
-                    lo_q = lo_q.min(at(vertex));
-                    hi_q = hi_q.max(at(vertex));
-                }
-            }
-            (lo_q, hi_q)
-        };
+        let range = |c: &[T; 3]| quadratic_range(c, h_lo, h_hi);
         let (d_lo, d_hi) = range(&ray.d);
         let h_abs = h_lo.abs().max(h_hi.abs());
         let d_err = gamma8 * quadratic(&self.md, h_abs);

@@ -1,7 +1,9 @@
 //! World rays and their images in a prism: nonlinear rays (Ogaki 2023, sec. 4.1-4.2).
 
 use crate::prism::Prism;
-use nlrt_poly::{Real, Vector2, Vector3, difference_of_products, solve_quadratic_in};
+use nlrt_poly::{
+    Real, Vector2, Vector3, difference_of_products, quadratic_range, solve_quadratic_in,
+};
 
 /// A world-space ray `o + t w` with unit direction.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -253,16 +255,7 @@ impl<T: Real> BaseEdges<T> {
         let a = h_lo.abs().max(h_hi.abs());
         let margin = self.error_scale * (T::ONE + a + a * a);
         let range = |c: &[T; 3]| {
-            let (x, y) = (quadratic_at(c, h_lo), quadratic_at(c, h_hi));
-            let (mut lo, mut hi) = (x.min(y), x.max(y));
-            if c[2] != T::ZERO {
-                let vertex = -c[1] / (T::TWO * c[2]);
-                if vertex > h_lo && vertex < h_hi {
-                    let z = quadratic_at(c, vertex);
-                    lo = lo.min(z);
-                    hi = hi.max(z);
-                }
-            }
+            let (lo, hi) = quadratic_range(c, h_lo, h_hi);
             (lo - margin, hi + margin)
         };
         let (d_lo, d_hi) = range(&self.d);
