@@ -1,8 +1,9 @@
 //! Traversal counters of nonlinear tracing (f32) per primary ray of a built-in scene at its
-//! small size, 160 x 120 pixel-centre rays, one thread: prism (TLAS leaf) visits, node
-//! visits of the BLAS walk, texel tests and walks that fell back to box tests.
+//! small size (or, with a second argument `paper`, at the paper's), 160 x 120 pixel-centre
+//! rays, one thread: prism (TLAS leaf) visits, node visits of the BLAS walk, texel tests and
+//! walks that fell back to box tests.
 //!
-//! `cargo run --release --example traversal_counts -p nlrt-render -- fur`
+//! `cargo run --release --example traversal_counts -p nlrt-render -- fur paper`
 
 use nlrt_accel::TraversalStats;
 use nlrt_poly::glam::Vec3;
@@ -11,7 +12,15 @@ use nlrt_render::trace::Nonlinear;
 use nlrt_shellmap::Ray;
 fn main() {
     let name = std::env::args().nth(1).unwrap_or("mountain".into());
-    let Some(scene) = builtin(&name, Size::Small) else {
+    let size = match std::env::args().nth(2).as_deref() {
+        None | Some("small") => Size::Small,
+        Some("paper") => Size::Paper,
+        Some(other) => {
+            eprintln!("unknown size {other} (small or paper)");
+            std::process::exit(2);
+        }
+    };
+    let Some(scene) = builtin(&name, size) else {
         eprintln!("unknown scene {name}");
         std::process::exit(2);
     };
