@@ -4,15 +4,18 @@
 //!
 //! - `build/mipmap-4096`: the min-max pyramid of a 4096^2 map (goal <= 60 ms, one thread).
 //! - `build/tlas-175k`: TLAS over 175,232 prisms (the paper's dress size; goal <= 150 ms).
-//! - `trace/<scene>/<type>`: primary camera rays through the whole structure (TLAS, prism
-//!   gate, BLAS) of the mountain (2 triangles, 4096^2 fBm) and the fur (8,192 triangles,
-//!   256^2 spikes tiled 8 x 8), f32 and f64, one thread.
+//! - `trace/<scene>/<type>`: primary camera rays through the whole structure (TLAS, BLAS
+//!   walk, texel or object tests) of the mountain (2 triangles, 4096^2 fBm), the fur (8,192
+//!   triangles, 256^2 spikes tiled 8 x 8) and two shell-mapped scenes, the Cornell box
+//!   (2,780 object triangles, 16 x 16 tiles) and the high-polygon blob (145,292), f32 and
+//!   f64, one thread.
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use nlrt_accel::{BaseMesh, DisplacedSurface, HeightField, TraversalStats, Wrap};
 use nlrt_poly::glam::{DVec2, DVec3};
 use nlrt_poly::{Real, Vector3};
 use nlrt_render::scenes::{self, Scene, Size};
+use nlrt_render::trace::Nonlinear;
 use nlrt_shellmap::Ray;
 use std::hint::black_box;
 
@@ -32,16 +35,7 @@ fn camera_rays(scene: &Scene, n: usize) -> Vec<(DVec3, DVec3)> {
 }
 
 fn trace<T: Real>(c: &mut Criterion, scene: &Scene) {
-    let scenes::Content::Displacement(field) = &scene.content else {
-        unreachable!("displacement scenes only")
-    };
-    let surface = DisplacedSurface::new(
-        scene.mesh::<T>(),
-        field.clone(),
-        T::from_f64(scene.height_scale),
-        T::from_f64(scene.tiling),
-    )
-    .unwrap();
+    let surface = Nonlinear::<T>::new(scene);
     let v = |a: DVec3| T::Vec3::new(T::from_f64(a.x), T::from_f64(a.y), T::from_f64(a.z));
     let rays: Vec<Ray<T>> = camera_rays(scene, 64)
         .into_iter()
@@ -53,10 +47,13 @@ fn trace<T: Real>(c: &mut Criterion, scene: &Scene) {
         b.iter(|| {
             let mut stats = TraversalStats::default();
             rays.iter()
-                .filter(|r| {
-                    surface
+                .filter(|r| match &surface {
+                    Nonlinear::Displaced(s) => s
                         .intersect(black_box(r), T::ZERO, T::INFINITY, &mut stats)
-                        .is_some()
+                        .is_some(),
+                    Nonlinear::Shell(s) => s
+                        .intersect(black_box(r), T::ZERO, T::INFINITY, &mut stats)
+                        .is_some(),
                 })
                 .count()
         })
@@ -139,7 +136,7 @@ fn builds(c: &mut Criterion) {
 }
 
 fn traversal(c: &mut Criterion) {
-    for name in ["mountain", "fur"] {
+    for name in ["mountain", "fur", "cornell", "highpoly"] {
         let scene = scenes::builtin(name, Size::Paper).unwrap();
         trace::<f32>(c, &scene);
         trace::<f64>(c, &scene);
