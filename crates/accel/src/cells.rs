@@ -322,8 +322,9 @@ pub(crate) const CURVE_STACK: usize = 48;
 /// box test per node).
 ///
 /// It starts from the heights at which the ray is inside the prism ([`BaseEdges::stretches`]
-/// on `root_heights`, the roots' height bounds; no separate ray-prism test is needed). A node's stretch is cut where the curve crosses the node's two split lines
-/// (the roots of two quadratics on the stretch's height interval,
+/// on `root_heights`, the roots' height bounds; no separate ray-prism test is needed). A
+/// node's stretch is cut where the curve crosses the node's two split lines (the roots of two
+/// quadratics on the stretch's height interval,
 /// [`TextureCurve::crossings`]); between two cuts the curve stays on one side of each line,
 /// so whatever of the piece lies in the node's square lies in one child, found from the
 /// piece's midpoint, and the piece goes there with its heights clipped to the child's height
@@ -342,8 +343,9 @@ pub(crate) const CURVE_STACK: usize = 48;
 /// both before `t_min` (as in the box test, exact where the shell does not fold, a sample
 /// where it does). Cells whose square misses the triangle's uv triangle `uv_tri` (in cell
 /// units) are skipped; `leaf(x, y, h, t_max, stats)` tests a cell and returns the distance of
-/// a hit nearer than `t_max`; `h` holds every height at which this piece of the curve is in
-/// the cell and in the prism (a cell met by several pieces is called once per piece).
+/// a hit nearer than `t_max`; `h` holds every height within the cell's height bounds at
+/// which this piece of the curve is in the cell and in the prism, rounding windows included
+/// (a cell met by several pieces is called once per piece).
 ///
 /// Returns `false` when a node produced more pieces than the fixed stack holds (only
 /// possible for curves running within rounding of many split lines at once): the caller then
