@@ -5,7 +5,7 @@
 
 mod common;
 
-use nlrt_poly::{Real, Vector2, Vector3};
+use nlrt_poly::{Real, Vector2, Vector3, solve_quadratic_in};
 use nlrt_shellmap::{
     BaseEdges, NonlinearRay, Prism, Ray, TextureCurve, TexturePlane, intersect_box,
     intersect_microtriangle, intersect_prism,
@@ -233,6 +233,39 @@ macro_rules! shellmap_properties {
                         if (q0 > clear && q1 < -clear) || (q0 < -clear && q1 > clear) {
                             prop_assert!(roots[..n].iter().any(|&(r, w)| r + w >= h0 && r - w <= h1), "no crossing in [{h0}, {h1}]: {:?}", &roots[..n]);
                         }
+                    }
+                }
+
+                /// The cheap "cannot cross" tests that let the walk, the box test and the texel
+                /// test skip a quadratic never skip one whose solve on the interval finds a
+                /// root: a split line through the curve at a random height (`U - c D`), each
+                /// base edge and the denominator, on random sub-intervals of [0, 1] (so the
+                /// skips leave every split point as it was).
+                #[test]
+                fn skipped_quadratics_have_no_root_on_the_interval(r in prism_params(), o in prop::array::uniform3(-2.0f64..2.0), target in prop::array::uniform3(0.0f64..1.0), h in 0.0f64..1.0, ends in prop::array::uniform2(0.0f64..1.0), axis in 0usize..2) {
+                    let prism = prism_from::<T>(&r);
+                    let origin = V3::new(T::from_f64(o[0]), T::from_f64(o[1]), T::from_f64(3.0 + o[2]));
+                    let aim = prism.shell_point(T::from_f64(target[0] * 0.5), T::from_f64(target[1] * 0.5), T::from_f64(target[2]));
+                    let ray = Ray::new(origin, aim - origin).expect("non-degenerate ray");
+                    let nl = NonlinearRay::new(&prism, &ray);
+                    let curve = TextureCurve::new(&prism, &nl);
+                    let edges = BaseEdges::new(&nl);
+                    let (a, b) = (T::from_f64(ends[0].min(ends[1])), T::from_f64(ends[0].max(ends[1])));
+                    if let Some(([u, v], _)) = curve.uv_with_error(T::from_f64(h)) {
+                        let c = if axis == 0 { u } else { v };
+                        let num = if axis == 0 { &nl.u } else { &nl.v };
+                        let q: [T; 3] = core::array::from_fn(|i| (-c).mul_add(nl.d[i], num[i]));
+                        if !curve.may_cross(axis, c, a, b) {
+                            prop_assert!(solve_quadratic_in(q, a, b).is_empty(), "line {axis} = {c} skipped on [{a}, {b}]");
+                        }
+                    }
+                    for k in 0..3 {
+                        if !edges.may_cross(k, a, b) {
+                            prop_assert!(solve_quadratic_in(edges.edges[k], a, b).is_empty(), "edge {k} skipped on [{a}, {b}]");
+                        }
+                    }
+                    if !edges.may_have_pole(a, b) {
+                        prop_assert!(solve_quadratic_in(nl.d, a, b).is_empty(), "pole skipped on [{a}, {b}]");
                     }
                 }
 

@@ -5,7 +5,8 @@ use core::fmt;
 use nlrt_poly::{Real, Vector3};
 use nlrt_poly::{horner_with_bound_scaled, solve_cubic_in, solve_quadratic_in};
 use nlrt_shellmap::{
-    BaseEdges, Hit, NonlinearRay, Prism, Ray, TexturePlane, alpha_beta_eq11, world_normal,
+    BaseEdges, Hit, NonlinearRay, Prism, Ray, TextureCurve, TexturePlane, alpha_beta_eq11,
+    world_normal,
 };
 
 use crate::bvh::{Aabb, Bvh4};
@@ -250,16 +251,19 @@ impl<T: Real> DisplacedSurface<T> {
         t_min: T,
         t_max: T,
     ) -> Option<(Hit<T>, TexelPart)> {
-        self.texel_hit(prism, ray, &BaseEdges::new(ray), x, y, t_min, t_max)
+        let curve = TextureCurve::new(prism, ray);
+        self.texel_hit(prism, ray, &BaseEdges::new(ray), &curve, x, y, t_min, t_max)
     }
 
-    /// [`DisplacedSurface::intersect_texel`] with the base edges computed once per prism.
+    /// [`DisplacedSurface::intersect_texel`] with the base edges and the texture curve's error
+    /// bounds computed once per prism.
     #[allow(clippy::too_many_arguments)]
     fn texel_hit(
         &self,
         prism: &Prism<T>,
         ray: &NonlinearRay<T>,
         edges: &BaseEdges<T>,
+        curve: &TextureCurve<'_, T>,
         x: i32,
         y: i32,
         t_min: T,
@@ -296,8 +300,15 @@ impl<T: Real> DisplacedSurface<T> {
             splits[n] = (s, 5);
             n += 1;
         }
+        // Faces, base edges and a pole that the curve cannot reach on [h_lo, h_hi] (an interval
+        // bound beyond the rounding of the quadratic and its evaluation) have no root to
+        // solve for: the splits are the same, as the solver would find nothing there either;
+        // the neighbouring texel decides the shared face by the same quadratic.
         let faces = [(&ray.u, u0), (&ray.u, u1), (&ray.v, v0), (&ray.v, v1)];
         for (edge, (num, face)) in faces.into_iter().enumerate() {
+            if !curve.may_cross(edge / 2, face, h_lo, h_hi) {
+                continue;
+            }
             for &r in solve_quadratic_in(line(num, face), h_lo, h_hi).iter() {
                 splits[n] = (r, edge as u8);
                 n += 1;
@@ -307,13 +318,18 @@ impl<T: Real> DisplacedSurface<T> {
             splits[n] = (r, 4);
             n += 1;
         }
-        for &r in solve_quadratic_in(ray.d, h_lo, h_hi).iter() {
-            splits[n] = (r, 5);
-            n += 1;
+        if edges.may_have_pole(h_lo, h_hi) {
+            for &r in solve_quadratic_in(ray.d, h_lo, h_hi).iter() {
+                splits[n] = (r, 5);
+                n += 1;
+            }
         }
         // The base triangle's edges: alpha = 0, beta = 0, alpha + beta = 1 (times D).
         let base_edges = &edges.edges;
         for (k, q) in base_edges.iter().enumerate() {
+            if !edges.may_cross(k, h_lo, h_hi) {
+                continue;
+            }
             for &r in solve_quadratic_in(*q, h_lo, h_hi).iter() {
                 splits[n] = (r, 6 + k as u8);
                 n += 1;
@@ -491,6 +507,7 @@ impl<T: Real> DisplacedSurface<T> {
     ) -> Option<SurfaceHit<T>> {
         let mut best = None;
         let edges = BaseEdges::new(ray);
+        let curve = TextureCurve::new(prism, ray);
         walk_cells::<T, STACK_LEN>(
             self.prisms.roots(tri),
             prism,
@@ -506,7 +523,7 @@ impl<T: Real> DisplacedSurface<T> {
             },
             |x, y, _, t_max, stats| {
                 stats.texel_tests += 1;
-                let (hit, part) = self.texel_hit(prism, ray, &edges, x, y, t_min, t_max)?;
+                let (hit, part) = self.texel_hit(prism, ray, &edges, &curve, x, y, t_min, t_max)?;
                 best = Some(SurfaceHit {
                     hit,
                     triangle: tri as u32,

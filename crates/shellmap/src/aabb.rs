@@ -150,6 +150,24 @@ impl<'a, T: Real> TextureCurve<'a, T> {
         span
     }
 
+    /// Whether the curve may cross the line `u = c` (`axis` 0) or `v = c` (`axis` 1) at a
+    /// height in `[a, b]`: false only where `U - c D` keeps one sign there by more than its
+    /// rounding bound (the `gamma(8)` bound of [`TextureCurve::crossings`], beyond the
+    /// evaluation bound by which a solver on `[a, b]` would report an end as a root), so that
+    /// neither `crossings` nor a solver on `[a, b]` would find a root.
+    #[must_use]
+    #[inline]
+    pub fn may_cross(&self, axis: usize, c: T, a: T, b: T) -> bool {
+        let (num, mag) = if axis == 0 {
+            (&self.ray.u, &self.mu)
+        } else {
+            (&self.ray.v, &self.mv)
+        };
+        let d = &self.ray.d;
+        let q: [T; 3] = core::array::from_fn(|i| (-c).mul_add(d[i], num[i]));
+        self.may_vanish(&q, mag, c, a, b)
+    }
+
     /// Whether `q = N - c D` (`N` the curve's `U` or `V`, with coefficient magnitudes `mag`)
     /// may vanish on `[a, b]`. Most stretches of curve stay on one side of a line: the range
     /// of `q` over `[a, b]` (ends and vertex), away from 0 by more than the error bound of its

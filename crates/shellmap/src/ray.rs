@@ -274,6 +274,38 @@ impl<T: Real> BaseEdges<T> {
         })
     }
 
+    /// Whether the quadratic `c` (an edge's or the denominator's, whose coefficients err by
+    /// less than the bound of [`BaseEdges::window`]) may vanish at a height in `[a, b]`: false
+    /// only where its range there stays away from 0 by more than that bound, which also
+    /// exceeds the evaluation bound by which a solver on `[a, b]` would report an end as a
+    /// root, so such a solve would find nothing (or only a root that rounding moved in from
+    /// outside, where no sign change is).
+    #[inline]
+    fn may_vanish(&self, c: &[T; 3], a: T, b: T) -> bool {
+        let x = a.abs().max(b.abs());
+        let margin = self.error_scale * (T::ONE + x + x * x);
+        let (lo, hi) = quadratic_range(c, a, b);
+        !(lo > margin || hi < -margin)
+    }
+
+    /// Whether the curve may cross base edge `k` (as in [`BaseEdges::window`]) at a height in
+    /// `[a, b]`: false only where the edge's quadratic keeps one sign there by more than the
+    /// bound on its coefficients' rounding (which exceeds the evaluation bound by which a
+    /// solver on `[a, b]` would report an end as a root), so no root needs solving for.
+    #[must_use]
+    #[inline]
+    pub fn may_cross(&self, k: usize, a: T, b: T) -> bool {
+        self.may_vanish(&self.edges[k], a, b)
+    }
+
+    /// Whether the denominator `D` may vanish (a pole of the curve: the ray parallel to the
+    /// prism's cross-section) at a height in `[a, b]`, decided as [`BaseEdges::may_cross`].
+    #[must_use]
+    #[inline]
+    pub fn may_have_pole(&self, a: T, b: T) -> bool {
+        self.may_vanish(&self.d, a, b)
+    }
+
     /// Calls `stretch(h_in, h_out)` for each interval of heights in `[h_lo, h_hi]` where the
     /// curve is inside the base triangle, i.e. the ray inside the prism cut to those heights;
     /// an end on an edge is widened by that crossing's [`BaseEdges::window`] (kept within
@@ -289,15 +321,21 @@ impl<T: Real> BaseEdges<T> {
         cuts[0] = (h_lo, T::ZERO);
         cuts[1] = (h_hi, T::ZERO);
         let mut n = 2;
+        // Edges (and a pole) the curve cannot reach on [h_lo, h_hi] have no root to solve for.
         for k in 0..3 {
+            if !self.may_cross(k, h_lo, h_hi) {
+                continue;
+            }
             for &r in solve_quadratic_in(self.edges[k], h_lo, h_hi).iter() {
                 cuts[n] = (r, self.window(k, r));
                 n += 1;
             }
         }
-        for &r in solve_quadratic_in(self.d, h_lo, h_hi).iter() {
-            cuts[n] = (r, T::ZERO);
-            n += 1;
+        if self.may_have_pole(h_lo, h_hi) {
+            for &r in solve_quadratic_in(self.d, h_lo, h_hi).iter() {
+                cuts[n] = (r, T::ZERO);
+                n += 1;
+            }
         }
         let cuts = &mut cuts[..n];
         cuts.sort_unstable_by(|a, b| a.0.partial_cmp(&b.0).unwrap_or(core::cmp::Ordering::Equal));
