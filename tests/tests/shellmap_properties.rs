@@ -26,6 +26,22 @@ fn prism_from<T: Real>(r: &[f64; 24]) -> Prism<T> {
     prism_with_tilt(r, 0.3)
 }
 
+/// A ray from above the prism (origin `o` offset by 3 in z) aimed at the shell point at
+/// canonical `(target[0] / 2, target[1] / 2)`, height `target[2]`.
+fn ray_into<T: Real>(prism: &Prism<T>, o: [f64; 3], target: [f64; 3]) -> Ray<T> {
+    let origin = T::Vec3::new(
+        T::from_f64(o[0]),
+        T::from_f64(o[1]),
+        T::from_f64(3.0 + o[2]),
+    );
+    let aim = prism.shell_point(
+        T::from_f64(target[0] * 0.5),
+        T::from_f64(target[1] * 0.5),
+        T::from_f64(target[2]),
+    );
+    Ray::new(origin, aim - origin).expect("non-degenerate ray")
+}
+
 /// As [`prism_from`] with normals tilted by at most `tilt`.
 fn prism_with_tilt<T: Real>(r: &[f64; 24], tilt: f64) -> Prism<T> {
     let v = |x: f64, y: f64, z: f64| T::Vec3::new(T::from_f64(x), T::from_f64(y), T::from_f64(z));
@@ -116,9 +132,7 @@ macro_rules! shellmap_properties {
                 #[test]
                 fn nonlinear_ray_points_are_on_the_ray(r in prism_params(), o in prop::array::uniform3(-2.0f64..2.0), target in prop::array::uniform3(0.0f64..1.0), hs in prop::array::uniform4(0.0f64..1.0)) {
                     let prism = prism_from::<T>(&r);
-                    let origin = V3::new(T::from_f64(o[0]), T::from_f64(o[1]), T::from_f64(3.0 + o[2]));
-                    let aim = prism.shell_point(T::from_f64(target[0] * 0.5), T::from_f64(target[1] * 0.5), T::from_f64(target[2]));
-                    let ray = Ray::new(origin, aim - origin).expect("non-degenerate ray");
+                    let ray = ray_into(&prism, o, target);
                     let nl = NonlinearRay::new(&prism, &ray);
                     let d_scale = nl.d.iter().map(|v| v.abs()).fold(0.0, T::max);
                     for &h in &hs {
@@ -143,9 +157,7 @@ macro_rules! shellmap_properties {
                 #[test]
                 fn box_test_keeps_boxes_the_curve_crosses(r in prism_params(), o in prop::array::uniform3(-2.0f64..2.0), target in prop::array::uniform3(0.0f64..1.0), h in 0.0f64..1.0, margins in prop::array::uniform6(0.0f64..0.3), zero in prop::array::uniform6(any::<bool>())) {
                     let prism = prism_from::<T>(&r);
-                    let origin = V3::new(T::from_f64(o[0]), T::from_f64(o[1]), T::from_f64(3.0 + o[2]));
-                    let aim = prism.shell_point(T::from_f64(target[0] * 0.5), T::from_f64(target[1] * 0.5), T::from_f64(target[2]));
-                    let ray = Ray::new(origin, aim - origin).expect("non-degenerate ray");
+                    let ray = ray_into(&prism, o, target);
                     let nl = NonlinearRay::new(&prism, &ray);
                     let h = T::from_f64(h);
                     let Some((u, v)) = nl.uv(h) else { return Ok(()) };
@@ -209,9 +221,7 @@ macro_rules! shellmap_properties {
                 #[test]
                 fn split_line_crossings_are_found(r in prism_params(), o in prop::array::uniform3(-2.0f64..2.0), target in prop::array::uniform3(0.0f64..1.0), h in 0.0f64..1.0, axis in 0usize..2) {
                     let prism = prism_from::<T>(&r);
-                    let origin = V3::new(T::from_f64(o[0]), T::from_f64(o[1]), T::from_f64(3.0 + o[2]));
-                    let aim = prism.shell_point(T::from_f64(target[0] * 0.5), T::from_f64(target[1] * 0.5), T::from_f64(target[2]));
-                    let ray = Ray::new(origin, aim - origin).expect("non-degenerate ray");
+                    let ray = ray_into(&prism, o, target);
                     let nl = NonlinearRay::new(&prism, &ray);
                     let curve = TextureCurve::new(&prism, &nl);
                     let Some(([u, v], _)) = curve.uv_with_error(T::from_f64(h)) else { return Ok(()) };
@@ -244,9 +254,7 @@ macro_rules! shellmap_properties {
                 #[test]
                 fn skipped_quadratics_have_no_root_on_the_interval(r in prism_params(), o in prop::array::uniform3(-2.0f64..2.0), target in prop::array::uniform3(0.0f64..1.0), h in 0.0f64..1.0, ends in prop::array::uniform2(0.0f64..1.0), axis in 0usize..2) {
                     let prism = prism_from::<T>(&r);
-                    let origin = V3::new(T::from_f64(o[0]), T::from_f64(o[1]), T::from_f64(3.0 + o[2]));
-                    let aim = prism.shell_point(T::from_f64(target[0] * 0.5), T::from_f64(target[1] * 0.5), T::from_f64(target[2]));
-                    let ray = Ray::new(origin, aim - origin).expect("non-degenerate ray");
+                    let ray = ray_into(&prism, o, target);
                     let nl = NonlinearRay::new(&prism, &ray);
                     let curve = TextureCurve::new(&prism, &nl);
                     let edges = BaseEdges::new(&nl);

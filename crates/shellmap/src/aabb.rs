@@ -107,13 +107,7 @@ impl<'a, T: Real> TextureCurve<'a, T> {
     #[must_use]
     #[inline]
     pub fn crossings(&self, axis: usize, c: T, a: T, b: T) -> ([(T, T); 2], usize) {
-        let (num, mag) = if axis == 0 {
-            (&self.ray.u, &self.mu)
-        } else {
-            (&self.ray.v, &self.mv)
-        };
-        let d = &self.ray.d;
-        let q: [T; 3] = core::array::from_fn(|i| (-c).mul_add(d[i], num[i]));
+        let (q, mag) = self.line(axis, c);
         let mut out = [(T::ZERO, T::ZERO); 2];
         let mut n = 0;
         if !self.may_vanish(&q, mag, c, a, b) {
@@ -158,14 +152,22 @@ impl<'a, T: Real> TextureCurve<'a, T> {
     #[must_use]
     #[inline]
     pub fn may_cross(&self, axis: usize, c: T, a: T, b: T) -> bool {
+        let (q, mag) = self.line(axis, c);
+        self.may_vanish(&q, mag, c, a, b)
+    }
+
+    /// The line `u = c` (`axis` 0) or `v = c` (`axis` 1) seen along the curve: the quadratic
+    /// `U - c D` (`V - c D`), zero where the curve is on the line, and the coefficient
+    /// magnitudes of `U` (`V`) for its error bound.
+    #[inline]
+    fn line(&self, axis: usize, c: T) -> ([T; 3], &[T; 3]) {
         let (num, mag) = if axis == 0 {
             (&self.ray.u, &self.mu)
         } else {
             (&self.ray.v, &self.mv)
         };
         let d = &self.ray.d;
-        let q: [T; 3] = core::array::from_fn(|i| (-c).mul_add(d[i], num[i]));
-        self.may_vanish(&q, mag, c, a, b)
+        (core::array::from_fn(|i| (-c).mul_add(d[i], num[i])), mag)
     }
 
     /// Whether `q = N - c D` (`N` the curve's `U` or `V`, with coefficient magnitudes `mag`)
@@ -255,15 +257,8 @@ impl<'a, T: Real> TextureCurve<'a, T> {
         };
         push(h_lo);
         push(h_hi);
-        let d = &ray.d;
-        let faces = [
-            (&ray.u, &self.mu, lo[0]),
-            (&ray.u, &self.mu, hi[0]),
-            (&ray.v, &self.mv, lo[1]),
-            (&ray.v, &self.mv, hi[1]),
-        ];
-        for (num, mag, face) in faces {
-            let q = core::array::from_fn(|i| (-face).mul_add(d[i], num[i]));
+        for (axis, face) in [(0, lo[0]), (0, hi[0]), (1, lo[1]), (1, hi[1])] {
+            let (q, mag) = self.line(axis, face);
             // A face the curve cannot reach on [h_lo, h_hi] has no root there to solve for.
             if !self.may_vanish(&q, mag, face, h_lo, h_hi) {
                 continue;
@@ -276,7 +271,7 @@ impl<'a, T: Real> TextureCurve<'a, T> {
         let poles = if d_keeps_sign {
             Roots::none()
         } else {
-            solve_quadratic_in(*d, h_lo, h_hi)
+            solve_quadratic_in(ray.d, h_lo, h_hi)
         };
         for &h in poles.iter() {
             push(h);
