@@ -573,7 +573,7 @@ pub(crate) fn traverse_curve_cells<T: Real>(
 pub(crate) fn walk_cells<T: Real, const STACK_LEN: usize>(
     root: RootNodes,
     prism: &Prism<T>,
-    ray: &NonlinearRay<T>,
+    curve: &TextureCurve<'_, T>,
     edges: &BaseEdges<T>,
     cell_size: T,
     t_min: T,
@@ -596,14 +596,13 @@ pub(crate) fn walk_cells<T: Real, const STACK_LEN: usize>(
         return;
     }
     let uv_tri = CellTriangle::new(uv_in_cells(prism, cell_size));
-    let curve = TextureCurve::new(prism, ray);
     let mut t = t_max;
     let mut stack = [Stretch::empty(); STACK_LEN];
     let complete = traverse_curve_cells(
         &mut stack,
         root,
         [h_lo, h_hi],
-        &curve,
+        curve,
         edges,
         cell_size,
         &uv_tri,
@@ -622,7 +621,15 @@ pub(crate) fn walk_cells<T: Real, const STACK_LEN: usize>(
             stats,
             |level, x, y, t_max| {
                 let h = node_heights(level, x, y);
-                texture_box_entry(prism, ray, cell_size, (level, x, y), h, t_min, t_max)
+                texture_box_entry(
+                    prism,
+                    curve.ray(),
+                    cell_size,
+                    (level, x, y),
+                    h,
+                    t_min,
+                    t_max,
+                )
             },
             |x, y, t_max, stats| leaf(x, y, [T::NEG_INFINITY, T::INFINITY], t_max, stats),
         );

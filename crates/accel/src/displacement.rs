@@ -511,7 +511,7 @@ impl<T: Real> DisplacedSurface<T> {
         walk_cells::<T, STACK_LEN>(
             self.prisms.roots(tri),
             prism,
-            ray,
+            &curve,
             &edges,
             self.texel_size,
             t_min,

@@ -216,16 +216,17 @@ impl<T: Real> ShellSurface<T> {
         intersect_microtriangle(prism, ray, &tri, lo, hi, t_min, t_max)
     }
 
-    /// The object's BVH in tile `(x, y)`, nearest first, its boxes cut to the heights `h` at
-    /// which the ray's curve is in the tile (from the walk: a box's part outside them is
-    /// outside the tile or the prism, so the box test's cheap interval rejection sees only the
-    /// short stretch of curve that matters); updates `best`.
+    /// The object's BVH in tile `(x, y)` along `curve` (set up once per prism), nearest
+    /// first, its boxes cut to the heights `h` at which the curve is in the tile (from the
+    /// walk: a box's part outside them is outside the tile or the prism, so the box test's
+    /// cheap interval rejection sees only the short stretch of curve that matters); updates
+    /// `best`.
     #[allow(clippy::too_many_arguments)]
     fn intersect_tile(
         &self,
         tri: usize,
         prism: &Prism<T>,
-        ray: &NonlinearRay<T>,
+        curve: &TextureCurve<'_, T>,
         (x, y): (i32, i32),
         [h_in, h_out]: [T; 2],
         t_min: T,
@@ -239,7 +240,7 @@ impl<T: Real> ShellSurface<T> {
             return;
         }
         let (dx, dy) = (T::from_i32(x), T::from_i32(y));
-        let curve = TextureCurve::new(prism, ray);
+        let ray = curve.ray();
         let mut stack = [(0u32, T::ZERO); OBJECT_STACK];
         let mut depth = 1;
         stack[0] = (0, t_min);
@@ -310,10 +311,11 @@ impl<T: Real> ShellSurface<T> {
     ) -> Option<ShellHit<T>> {
         let [h_lo, h_hi] = self.object.h_range;
         let mut best = None;
+        let curve = TextureCurve::new(prism, ray);
         walk_cells::<T, CURVE_STACK>(
             self.prisms.roots(tri),
             prism,
-            ray,
+            &curve,
             &BaseEdges::new(ray),
             T::ONE,
             t_min,
@@ -322,7 +324,17 @@ impl<T: Real> ShellSurface<T> {
             |_, _, _| [h_lo, h_hi],
             |x, y, h, t_max, stats| {
                 let mut t = t_max;
-                self.intersect_tile(tri, prism, ray, (x, y), h, t_min, &mut t, &mut best, stats);
+                self.intersect_tile(
+                    tri,
+                    prism,
+                    &curve,
+                    (x, y),
+                    h,
+                    t_min,
+                    &mut t,
+                    &mut best,
+                    stats,
+                );
                 (t < t_max).then_some(t)
             },
         );
