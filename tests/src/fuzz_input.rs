@@ -233,6 +233,7 @@ const BRUTE_FORCE_CELLS: i64 = 4096;
 /// subset of the same texels with the same arithmetic), checked when the texel range is small.
 pub fn fuzz_displacement<T: Real>(data: &[u8]) {
     use nlrt_accel::{DisplacedSurface, HeightField, TraversalStats, Wrap};
+    use nlrt_baselines::{AffineTracing, ConeTraced, Marching};
     let header = data.first().copied().unwrap_or(0);
     let side = 2usize << (header & 3);
     let wrap = if header & 4 == 0 {
@@ -277,9 +278,9 @@ pub fn fuzz_displacement<T: Real>(data: &[u8]) {
     if let Some(h) = surface.intersect_affine(&ray, T::ZERO, T::INFINITY, &mut stats) {
         assert!(h.t.is_finite() && h.t > T::ZERO, "tessellation-free {h:?}");
     }
-    let opts = nlrt_accel::MarchOptions {
+    let opts = nlrt_baselines::MarchOptions {
         max_samples: 256,
-        ..nlrt_accel::MarchOptions::default()
+        ..nlrt_baselines::MarchOptions::default()
     };
     if let Some(h) = surface.intersect_marching(&ray, T::ZERO, T::INFINITY, &opts, &mut stats) {
         assert!(h.hit.t.is_finite() && h.hit.t > T::ZERO, "marching {h:?}");
@@ -290,11 +291,11 @@ pub fn fuzz_displacement<T: Real>(data: &[u8]) {
         assert!(h.hit.t.is_finite() && h.hit.t > T::ZERO, "curved {h:?}");
         let _ = surface.curved_normal(&h, ray.dir);
     }
-    let cone = nlrt_accel::ConeTracing::new(
+    let cone = nlrt_baselines::ConeTracing::new(
         &surface,
-        nlrt_accel::ConeOptions {
+        nlrt_baselines::ConeOptions {
             max_steps: 256,
-            ..nlrt_accel::ConeOptions::default()
+            ..nlrt_baselines::ConeOptions::default()
         },
     );
     if let Some(h) = surface.intersect_cone_traced(&ray, T::ZERO, T::INFINITY, &cone, &mut stats) {

@@ -1,163 +1,13 @@
-//! What displacement and shell mapping share: the TLAS over a base mesh's prisms (built on the
-//! fly, one per leaf) with each triangle's root cells, and the implicit quadtree over
-//! texture-space cells (texels of a height map, tiles of an instanced object) traversed by a
-//! nonlinear ray nearest first.
+//! The BLAS walk that displacement and shell mapping share (Ogaki 2023, sec. 4.4, 5.4): the
+//! implicit quadtree over one base triangle's texture-space cells (texels of a height map,
+//! tiles of an instanced object), traversed nearest first either by box tests
+//! ([`traverse_cells`]) or along the nonlinear ray's texture-space curve ([`walk_cells`]).
 
-use alloc::vec::Vec;
-use nlrt_poly::{Real, Vector2, Vector3};
-use nlrt_shellmap::{BaseEdges, NonlinearRay, Prism, Ray, TextureCurve, intersect_box};
+use nlrt_poly::{Real, Vector2};
+use nlrt_shellmap::{BaseEdges, NonlinearRay, Prism, TextureCurve, intersect_box};
 
-use crate::bvh::{Bvh4, SlabRay};
-use crate::displacement::{
-    CellTriangle, MAX_TEXEL_COORDINATE, RootNodes, TraversalStats, root_nodes,
-};
-use crate::mesh::{BaseMesh, prism_bounds};
-
-/// Why the prisms of a mesh could not be set up.
-#[derive(Clone, Debug, PartialEq)]
-pub(crate) enum SetupError {
-    /// The height scale is not finite.
-    HeightScale(f64),
-    /// The tiling is not finite and positive.
-    Tiling(f64),
-    /// A triangle's cells reach beyond [`MAX_TEXEL_COORDINATE`].
-    UvOutOfRange(usize),
-}
-
-/// A base mesh's prisms with their TLAS and per-triangle root cells.
-#[derive(Clone, Debug)]
-pub(crate) struct PrismTlas<T: Real> {
-    pub(crate) mesh: BaseMesh<T>,
-    height_scale: T,
-    tiling: T,
-    roots: Vec<RootNodes>,
-    pub(crate) tlas: Bvh4<T>,
-}
-
-impl<T: Real> PrismTlas<T> {
-    /// `cells_per_unit`: cells per unit of tiled uv (a map's side; 1 for object tiles).
-    pub(crate) fn new(
-        mesh: BaseMesh<T>,
-        height_scale: T,
-        tiling: T,
-        cells_per_unit: f64,
-    ) -> Result<Self, SetupError> {
-        if !height_scale.is_finite() {
-            return Err(SetupError::HeightScale(height_scale.to_f64()));
-        }
-        if !(tiling > T::ZERO && tiling.is_finite()) {
-            return Err(SetupError::Tiling(tiling.to_f64()));
-        }
-        let mut roots = Vec::with_capacity(mesh.triangle_count());
-        let mut boxes = Vec::with_capacity(mesh.triangle_count());
-        for i in 0..mesh.triangle_count() {
-            let prism = mesh.prism(i, height_scale, tiling);
-            boxes.push(prism_bounds(&prism));
-            let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-            for uv in prism.uv {
-                for (a, c) in [uv.x(), uv.y()].into_iter().enumerate() {
-                    let cells = c.to_f64() * cells_per_unit;
-                    lo[a] = lo[a].min(cells);
-                    hi[a] = hi[a].max(cells);
-                }
-            }
-            let extent = lo[0]
-                .abs()
-                .max(lo[1].abs())
-                .max(hi[0].abs())
-                .max(hi[1].abs());
-            if !(extent < MAX_TEXEL_COORDINATE) {
-                return Err(SetupError::UvOutOfRange(i));
-            }
-            roots.push(root_nodes(lo, hi));
-        }
-        let tlas = Bvh4::build(&boxes, 1);
-        Ok(Self {
-            mesh,
-            height_scale,
-            tiling,
-            roots,
-            tlas,
-        })
-    }
-
-    pub(crate) fn roots(&self, i: usize) -> RootNodes {
-        self.roots[i]
-    }
-
-    #[inline]
-    pub(crate) fn prism(&self, i: usize) -> Prism<T> {
-        self.mesh.prism(i, self.height_scale, self.tiling)
-    }
-
-    pub(crate) fn memory_bytes(&self) -> usize {
-        self.tlas.memory_bytes() + self.roots.len() * core::mem::size_of::<RootNodes>()
-    }
-
-    /// TLAS traversal (conservative slab tests, nearest first): `per_prism(triangle, prism,
-    /// t_max)` for each prism whose box the ray enters before `t_max`, which returns a hit and
-    /// its distance when it finds one nearer than `t_max`.
-    pub(crate) fn traverse<H>(
-        &self,
-        ray: &Ray<T>,
-        t_min: T,
-        t_max: T,
-        mut per_prism: impl FnMut(usize, &Prism<T>, T) -> Option<(H, T)>,
-    ) -> Option<H> {
-        let slab = SlabRay::new(ray.origin, ray.dir);
-        let mut best = None;
-        self.tlas.traverse(&slab, t_min, t_max, |tri, t_max| {
-            let prism = self.prism(tri as usize);
-            let (hit, t) = per_prism(tri as usize, &prism, t_max)?;
-            best = Some(hit);
-            Some(t)
-        });
-        best
-    }
-
-    /// [`PrismTlas::traverse`], then `blas(triangle, prism, nonlinear ray, t_max)` (which
-    /// finds where the ray is inside the prism itself: [`walk_cells`]).
-    pub(crate) fn intersect<H>(
-        &self,
-        ray: &Ray<T>,
-        t_min: T,
-        t_max: T,
-        stats: &mut TraversalStats,
-        mut blas: impl FnMut(
-            usize,
-            &Prism<T>,
-            &NonlinearRay<T>,
-            T,
-            &mut TraversalStats,
-        ) -> Option<(H, T)>,
-    ) -> Option<H> {
-        self.traverse(ray, t_min, t_max, |tri, prism, t_max| {
-            stats.prism_tests += 1;
-            let nl = NonlinearRay::new(prism, ray);
-            blas(tri, prism, &nl, t_max, stats)
-        })
-    }
-
-    /// Every triangle, no TLAS and no gate: `per_triangle` as in [`PrismTlas::intersect`].
-    pub(crate) fn intersect_brute_force<H>(
-        &self,
-        ray: &Ray<T>,
-        t_max: T,
-        mut per_triangle: impl FnMut(usize, &Prism<T>, &NonlinearRay<T>, T) -> Option<(H, T)>,
-    ) -> Option<H> {
-        let mut best = None;
-        let mut t_max = t_max;
-        for tri in 0..self.mesh.triangle_count() {
-            let prism = self.prism(tri);
-            let nl = NonlinearRay::new(&prism, ray);
-            if let Some((hit, t)) = per_triangle(tri, &prism, &nl, t_max) {
-                t_max = t;
-                best = Some(hit);
-            }
-        }
-        best
-    }
-}
+use crate::stats::TraversalStats;
+use crate::tlas::RootNodes;
 
 #[derive(Clone, Copy)]
 struct Pending<T> {
@@ -182,7 +32,7 @@ const STACK: usize = 4 + 3 * MAX_ROOT_LEVEL;
 /// misses the triangle's uv triangle `uv_tri` (in cell units) skipped, nodes entered beyond the
 /// current `t_max` skipped; `leaf(x, y, t_max, stats)` tests a cell and returns the distance of
 /// a hit nearer than `t_max`.
-pub(crate) fn traverse_cells<T: Real>(
+pub fn traverse_cells<T: Real>(
     root: RootNodes,
     uv_tri: &CellTriangle<T>,
     mut t_max: T,
@@ -637,7 +487,8 @@ pub(crate) fn walk_cells<T: Real, const STACK_LEN: usize>(
 }
 
 /// The prism's uv triangle in cell units (`cell_size`: the uv side of a cell).
-pub(crate) fn uv_in_cells<T: Real>(prism: &Prism<T>, cell_size: T) -> [[T; 2]; 3] {
+#[must_use]
+pub fn uv_in_cells<T: Real>(prism: &Prism<T>, cell_size: T) -> [[T; 2]; 3] {
     let cells_per_unit = T::ONE / cell_size;
     prism
         .uv
@@ -671,13 +522,130 @@ pub(crate) fn texture_box_entry<T: Real>(
     .map(|span| span.t_in)
 }
 
-/// `n` (a world normal from Eq. 13, any length and sign) as a unit vector facing against the
-/// ray direction `dir`; `None` where it is zero (the shell degenerates to a line or point).
-pub(crate) fn facing_unit<T: Real>(n: T::Vec3, dir: T::Vec3) -> Option<T::Vec3> {
-    let len = n.length();
-    if !(len > T::ZERO && len.is_finite()) {
-        return None;
+/// A base triangle's uv triangle in cell units, set up for [`CellTriangle::meets_square`]:
+/// per edge its normal, a point on it and the side the triangle lies on (computed once per
+/// prism, not per node of the walk).
+#[derive(Clone, Copy, Debug)]
+pub struct CellTriangle<T> {
+    /// Per edge: a point on it, its normal scaled by the side of the opposite corner;
+    /// `None` for an edge that cannot separate (degenerate triangle).
+    edges: [Option<([T; 2], [T; 2])>; 3],
+}
+
+impl<T: Real> CellTriangle<T> {
+    /// Sets up the triangle `tri` (cell units).
+    #[must_use]
+    pub fn new(tri: [[T; 2]; 3]) -> Self {
+        let gamma5 = gamma5::<T>();
+        let edges = core::array::from_fn(|i| {
+            let (a, b, c) = (tri[i], tri[(i + 1) % 3], tri[(i + 2) % 3]);
+            let n = [a[1] - b[1], b[0] - a[0]];
+            let (p0, p1) = (n[0] * (c[0] - a[0]), n[1] * (c[1] - a[1]));
+            let side = p0 + p1;
+            // Degenerate within rounding: this edge cannot separate.
+            if !(side.abs() > gamma5 * (p0.abs() + p1.abs())) {
+                return None;
+            }
+            let n = if side > T::ZERO { n } else { [-n[0], -n[1]] };
+            Some((a, n))
+        });
+        Self { edges }
     }
-    let n = n * (T::ONE / len);
-    Some(if n.dot(dir) > T::ZERO { -n } else { n })
+
+    /// Whether the axis-aligned square `[lo, hi]` may meet the triangle (separating axis
+    /// test over the triangle's three edge normals; the box axes are covered by the root's
+    /// texel range). Conservative: a separation is accepted only beyond a bound on the
+    /// rounding error of the projections (`gamma(5)` times the sum of the magnitudes of their
+    /// terms), so a square touching the triangle within rounding is kept. Degenerate
+    /// triangles (a line or a point in uv) keep every square that the texel range allows
+    /// along their degenerate direction.
+    #[inline]
+    #[must_use]
+    pub fn meets_square(&self, lo: [T; 2], hi: [T; 2]) -> bool {
+        let gamma5 = gamma5::<T>();
+        !self.edges.iter().flatten().any(|&(a, n)| {
+            [
+                [lo[0], lo[1]],
+                [hi[0], lo[1]],
+                [lo[0], hi[1]],
+                [hi[0], hi[1]],
+            ]
+            .iter()
+            .all(|corner| {
+                let (p0, p1) = (n[0] * (corner[0] - a[0]), n[1] * (corner[1] - a[1]));
+                p0 + p1 < -gamma5 * (p0.abs() + p1.abs())
+            })
+        })
+    }
+}
+
+/// `gamma(5) = 5u / (1 - 5u)`: the relative error bound of the projections of
+/// [`CellTriangle`] (a difference, two products, a sum).
+#[inline(always)]
+fn gamma5<T: Real>() -> T {
+    let five_u = T::from_i32(5) * T::UNIT_ROUNDOFF;
+    five_u / (T::ONE - five_u)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The uv-triangle test of the walk keeps every square that holds a point of the
+    /// triangle (sampled on a fine grid, squares touching it included) and drops squares
+    /// clearly apart from it; a degenerate triangle (a segment) drops nothing that the
+    /// segment's line meets.
+    #[test]
+    fn squares_meeting_the_uv_triangle_are_kept() {
+        let triangles = [
+            [[0.3, 0.2], [7.6, 1.1], [2.5, 6.8]],
+            [[5.0, 5.0], [1.0, 6.0], [6.5, 0.5]],
+            [[0.0, 0.0], [8.0, 0.0], [0.0, 8.0]],
+            [[1.0, 1.0], [7.0, 7.0], [4.0, 4.0]], // a segment
+        ];
+        for tri in triangles {
+            let cells = CellTriangle::new(tri);
+            let inside = |p: [f64; 2]| {
+                let [a, b, c] = tri;
+                let cross = |u: [f64; 2], v: [f64; 2]| {
+                    (v[0] - u[0]) * (p[1] - u[1]) - (v[1] - u[1]) * (p[0] - u[0])
+                };
+                let (d0, d1, d2) = (cross(a, b), cross(b, c), cross(c, a));
+                (d0 >= 0.0 && d1 >= 0.0 && d2 >= 0.0) || (d0 <= 0.0 && d1 <= 0.0 && d2 <= 0.0)
+            };
+            let (mut kept, mut dropped) = (0, 0);
+            for y in -2..10 {
+                for x in -2..10 {
+                    let (lo, hi) = (
+                        [f64::from(x), f64::from(y)],
+                        [f64::from(x + 1), f64::from(y + 1)],
+                    );
+                    let touched = (0..=16).any(|j| {
+                        (0..=16).any(|i| {
+                            inside([lo[0] + f64::from(i) / 16.0, lo[1] + f64::from(j) / 16.0])
+                        })
+                    });
+                    let meets = cells.meets_square(lo, hi);
+                    assert!(meets || !touched, "{tri:?}: square {lo:?} holds a point");
+                    // All four corners clearly beyond one edge's line (away from the third
+                    // vertex): that edge separates, so the square must go. (Squares apart
+                    // only along a box axis are left to the root's texel range.)
+                    let corners = [lo, [hi[0], lo[1]], [lo[0], hi[1]], hi];
+                    let beyond_an_edge = (0..3).any(|e| {
+                        let (a, b, c) = (tri[e], tri[(e + 1) % 3], tri[(e + 2) % 3]);
+                        let side = |p: [f64; 2]| {
+                            (b[0] - a[0]) * (p[1] - a[1]) - (b[1] - a[1]) * (p[0] - a[0])
+                        };
+                        let s = side(c);
+                        s != 0.0 && corners.iter().all(|&p| side(p) * s.signum() < -0.01)
+                    });
+                    if beyond_an_edge {
+                        assert!(!meets, "{tri:?}: square {lo:?} is beyond an edge");
+                    }
+                    if meets { kept += 1 } else { dropped += 1 }
+                }
+            }
+            assert!(kept > 0 && (dropped > 0 || tri[2] == [4.0, 4.0]), "{tri:?}");
+        }
+    }
 }

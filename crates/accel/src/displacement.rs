@@ -6,17 +6,15 @@ use nlrt_poly::{Real, Vector3};
 use nlrt_poly::{horner_with_bound_scaled, solve_cubic_in, solve_quadratic_in};
 use nlrt_shellmap::{
     BaseEdges, Hit, NonlinearRay, Prism, Ray, TextureCurve, TexturePlane, alpha_beta_eq11,
-    world_normal,
+    facing_unit, world_normal,
 };
 
 use crate::bvh::{Aabb, Bvh4};
-use crate::cells::{CURVE_STACK, PrismTlas, SetupError, facing_unit, walk_cells};
+use crate::cells::{CURVE_STACK, walk_cells};
 use crate::heightfield::{HEIGHT_ONE, HeightField};
 use crate::mesh::BaseMesh;
-
-/// Texel coordinates beyond this (in one axis, after tiling) are rejected: they keep every
-/// texel corner exactly representable in `f32` (24-bit significand) with room to spare.
-pub const MAX_TEXEL_COORDINATE: f64 = (1u64 << 22) as f64;
+use crate::stats::TraversalStats;
+use crate::tlas::{MAX_TEXEL_COORDINATE, PrismTlas, RootNodes, SetupError};
 
 /// Why a displaced surface could not be built.
 #[derive(Clone, Debug, PartialEq)]
@@ -46,24 +44,6 @@ impl fmt::Display for DisplacementError {
     }
 }
 
-/// Where a base triangle's traversal starts: the smallest pyramid level at which the
-/// triangle's uv box spans at most 2 x 2 nodes, and those nodes (sec. 5.4, root selection).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct RootNodes {
-    /// Level (0 = texels).
-    pub level: u32,
-    /// First node.
-    pub x: i32,
-    /// First node.
-    pub y: i32,
-    /// Nodes along u (1 or 2).
-    pub nx: u8,
-    /// Nodes along v (1 or 2).
-    pub ny: u8,
-    /// Texel range of the uv box, inclusive: `[x0, y0, x1, y1]`.
-    pub texels: [i32; 4],
-}
-
 /// Which part of a texel was hit.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum TexelPart {
@@ -86,20 +66,6 @@ pub struct SurfaceHit<T: Real> {
     pub texel: [i32; 2],
     /// Part of the texel.
     pub part: TexelPart,
-}
-
-/// Counters of one traversal (for reports; cheap enough to keep on).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct TraversalStats {
-    /// Prisms whose exact test ran.
-    pub prism_tests: u32,
-    /// Texture-space box tests.
-    pub box_tests: u32,
-    /// Texels tested (each one or two microtriangles, or one flat rectangle).
-    pub texel_tests: u32,
-    /// Base triangles whose walk along the ray's curve outgrew its fixed stack and was
-    /// finished by box tests (slower, same answer).
-    pub fallbacks: u32,
 }
 
 /// A displacement-mapped mesh: base mesh, height field, height scale and tiling, with the
@@ -182,8 +148,32 @@ impl<T: Real> DisplacedSurface<T> {
         self.field.memory_bytes() + self.prisms.memory_bytes()
     }
 
+    /// The uv side of one texel (`1 / side` of the map): texture coordinates divided by it
+    /// are texel coordinates.
+    #[must_use]
+    pub fn texel_size(&self) -> T {
+        self.texel_size
+    }
+
+    /// TLAS traversal over the prisms (conservative slab tests, nearest first):
+    /// `per_prism(triangle, prism, t_max)` runs for each prism whose box the ray enters before
+    /// the current `t_max` and returns a hit and its distance when it finds one nearer; the
+    /// nearest such hit is returned. The building block of every per-prism method
+    /// ([`DisplacedSurface::intersect`] is this with the BLAS walk as `per_prism`).
+    pub fn traverse_prisms<H>(
+        &self,
+        ray: &Ray<T>,
+        t_min: T,
+        t_max: T,
+        per_prism: impl FnMut(usize, &Prism<T>, T) -> Option<(H, T)>,
+    ) -> Option<H> {
+        self.prisms.traverse(ray, t_min, t_max, per_prism)
+    }
+
+    /// A stored sample (or pyramid bound) `s` as a texture height in `[0, 1]`.
+    #[must_use]
     #[inline]
-    pub(crate) fn height(s: u16) -> T {
+    pub fn height(s: u16) -> T {
         // Same division for samples and pyramid bounds: rounding is monotonic, so a bound
         // stays a bound after conversion.
         T::from_i32(i32::from(s)) / T::from_i32(i32::from(HEIGHT_ONE))
@@ -194,8 +184,10 @@ impl<T: Real> DisplacedSurface<T> {
         T::from_i32(i) * self.texel_size
     }
 
-    /// The texture-space microtriangles (or flat texel) of texel `(x, y)`.
-    pub(crate) fn texel_geometry(&self, x: i32, y: i32) -> ([T; 4], [T; 4]) {
+    /// The texture-space geometry of texel `(x, y)`: its uv square `[u0, v0, u1, v1]` and
+    /// its corner heights `[h00, h10, h01, h11]` (the two microtriangles, or a flat texel).
+    #[must_use]
+    pub fn texel_geometry(&self, x: i32, y: i32) -> ([T; 4], [T; 4]) {
         let c = self.field.texel_corners(i64::from(x), i64::from(y));
         let h = c.map(Self::height);
         let uv = [
@@ -623,92 +615,6 @@ impl<T: Real> DisplacedSurface<T> {
     }
 }
 
-/// The smallest level at which texels `floor(lo)..=floor(hi)` span at most 2 nodes per axis.
-pub(crate) fn root_nodes(lo: [f64; 2], hi: [f64; 2]) -> RootNodes {
-    // floor for |x| < MAX_TEXEL_COORDINATE (checked by the caller), without std or libm.
-    let floor = |x: f64| {
-        let t = x as i32;
-        if f64::from(t) > x { t - 1 } else { t }
-    };
-    let t0 = [floor(lo[0]), floor(lo[1])];
-    let t1 = [floor(hi[0]), floor(hi[1])];
-    let mut level = 0;
-    while ((t1[0] >> level) - (t0[0] >> level)) > 1 || ((t1[1] >> level) - (t0[1] >> level)) > 1 {
-        level += 1;
-    }
-    RootNodes {
-        level,
-        x: t0[0] >> level,
-        y: t0[1] >> level,
-        nx: ((t1[0] >> level) - (t0[0] >> level) + 1) as u8,
-        ny: ((t1[1] >> level) - (t0[1] >> level) + 1) as u8,
-        texels: [t0[0], t0[1], t1[0], t1[1]],
-    }
-}
-
-/// A base triangle's uv triangle in cell units, set up for [`CellTriangle::meets_square`]:
-/// per edge its normal, a point on it and the side the triangle lies on (computed once per
-/// prism, not per node of the walk).
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct CellTriangle<T> {
-    /// Per edge: a point on it, its normal scaled by the side of the opposite corner;
-    /// `None` for an edge that cannot separate (degenerate triangle).
-    edges: [Option<([T; 2], [T; 2])>; 3],
-}
-
-impl<T: Real> CellTriangle<T> {
-    /// Sets up the triangle `tri` (cell units).
-    pub(crate) fn new(tri: [[T; 2]; 3]) -> Self {
-        let gamma5 = gamma5::<T>();
-        let edges = core::array::from_fn(|i| {
-            let (a, b, c) = (tri[i], tri[(i + 1) % 3], tri[(i + 2) % 3]);
-            let n = [a[1] - b[1], b[0] - a[0]];
-            let (p0, p1) = (n[0] * (c[0] - a[0]), n[1] * (c[1] - a[1]));
-            let side = p0 + p1;
-            // Degenerate within rounding: this edge cannot separate.
-            if !(side.abs() > gamma5 * (p0.abs() + p1.abs())) {
-                return None;
-            }
-            let n = if side > T::ZERO { n } else { [-n[0], -n[1]] };
-            Some((a, n))
-        });
-        Self { edges }
-    }
-
-    /// Whether the axis-aligned square `[lo, hi]` may meet the triangle (separating axis
-    /// test over the triangle's three edge normals; the box axes are covered by the root's
-    /// texel range). Conservative: a separation is accepted only beyond a bound on the
-    /// rounding error of the projections (`gamma(5)` times the sum of the magnitudes of their
-    /// terms), so a square touching the triangle within rounding is kept. Degenerate
-    /// triangles (a line or a point in uv) keep every square that the texel range allows
-    /// along their degenerate direction.
-    #[inline]
-    pub(crate) fn meets_square(&self, lo: [T; 2], hi: [T; 2]) -> bool {
-        let gamma5 = gamma5::<T>();
-        !self.edges.iter().flatten().any(|&(a, n)| {
-            [
-                [lo[0], lo[1]],
-                [hi[0], lo[1]],
-                [lo[0], hi[1]],
-                [hi[0], hi[1]],
-            ]
-            .iter()
-            .all(|corner| {
-                let (p0, p1) = (n[0] * (corner[0] - a[0]), n[1] * (corner[1] - a[1]));
-                p0 + p1 < -gamma5 * (p0.abs() + p1.abs())
-            })
-        })
-    }
-}
-
-/// `gamma(5) = 5u / (1 - 5u)`: the relative error bound of the projections of
-/// [`CellTriangle`] (a difference, two products, a sum).
-#[inline(always)]
-fn gamma5<T: Real>() -> T {
-    let five_u = T::from_i32(5) * T::UNIT_ROUNDOFF;
-    five_u / (T::ONE - five_u)
-}
-
 impl<T: Real> DisplacedSurface<T> {
     /// The prism boxes' union.
     #[must_use]
@@ -724,64 +630,6 @@ mod tests {
     use alloc::vec;
     use alloc::vec::Vec;
     use nlrt_poly::glam::{DVec2, DVec3};
-
-    /// The uv-triangle test of the walk keeps every square that holds a point of the
-    /// triangle (sampled on a fine grid, squares touching it included) and drops squares
-    /// clearly apart from it; a degenerate triangle (a segment) drops nothing that the
-    /// segment's line meets.
-    #[test]
-    fn squares_meeting_the_uv_triangle_are_kept() {
-        let triangles = [
-            [[0.3, 0.2], [7.6, 1.1], [2.5, 6.8]],
-            [[5.0, 5.0], [1.0, 6.0], [6.5, 0.5]],
-            [[0.0, 0.0], [8.0, 0.0], [0.0, 8.0]],
-            [[1.0, 1.0], [7.0, 7.0], [4.0, 4.0]], // a segment
-        ];
-        for tri in triangles {
-            let cells = CellTriangle::new(tri);
-            let inside = |p: [f64; 2]| {
-                let [a, b, c] = tri;
-                let cross = |u: [f64; 2], v: [f64; 2]| {
-                    (v[0] - u[0]) * (p[1] - u[1]) - (v[1] - u[1]) * (p[0] - u[0])
-                };
-                let (d0, d1, d2) = (cross(a, b), cross(b, c), cross(c, a));
-                (d0 >= 0.0 && d1 >= 0.0 && d2 >= 0.0) || (d0 <= 0.0 && d1 <= 0.0 && d2 <= 0.0)
-            };
-            let (mut kept, mut dropped) = (0, 0);
-            for y in -2..10 {
-                for x in -2..10 {
-                    let (lo, hi) = (
-                        [f64::from(x), f64::from(y)],
-                        [f64::from(x + 1), f64::from(y + 1)],
-                    );
-                    let touched = (0..=16).any(|j| {
-                        (0..=16).any(|i| {
-                            inside([lo[0] + f64::from(i) / 16.0, lo[1] + f64::from(j) / 16.0])
-                        })
-                    });
-                    let meets = cells.meets_square(lo, hi);
-                    assert!(meets || !touched, "{tri:?}: square {lo:?} holds a point");
-                    // All four corners clearly beyond one edge's line (away from the third
-                    // vertex): that edge separates, so the square must go. (Squares apart
-                    // only along a box axis are left to the root's texel range.)
-                    let corners = [lo, [hi[0], lo[1]], [lo[0], hi[1]], hi];
-                    let beyond_an_edge = (0..3).any(|e| {
-                        let (a, b, c) = (tri[e], tri[(e + 1) % 3], tri[(e + 2) % 3]);
-                        let side = |p: [f64; 2]| {
-                            (b[0] - a[0]) * (p[1] - a[1]) - (b[1] - a[1]) * (p[0] - a[0])
-                        };
-                        let s = side(c);
-                        s != 0.0 && corners.iter().all(|&p| side(p) * s.signum() < -0.01)
-                    });
-                    if beyond_an_edge {
-                        assert!(!meets, "{tri:?}: square {lo:?} is beyond an edge");
-                    }
-                    if meets { kept += 1 } else { dropped += 1 }
-                }
-            }
-            assert!(kept > 0 && (dropped > 0 || tri[2] == [4.0, 4.0]), "{tri:?}");
-        }
-    }
 
     /// A walk whose stack is too small for its pieces gives up and finishes the triangle by
     /// box tests: the same nearest hits as the full walk and as testing every texel, and the

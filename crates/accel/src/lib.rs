@@ -37,35 +37,20 @@ compile_error!("nlrt-accel needs the `std` or the `libm` feature");
 
 extern crate alloc;
 
-mod affine;
 mod bvh;
 mod cells;
-mod cone;
 mod displacement;
-mod distance_map;
-mod geometry_image;
 mod heightfield;
-mod march;
 mod mesh;
-mod projective;
 mod shell;
-#[cfg(test)]
-mod test_util;
-mod tetra;
-mod volume;
+mod stats;
+mod tlas;
 
-pub use affine::AffineHit;
 pub use bvh::{ARITY, Aabb, Bvh4, Node4, SlabRay, ray_triangle};
-pub use cone::{ConeMap, ConeMapBuilder, ConeOptions, ConeTracing, Rectification, VertexQuadrics};
-pub use displacement::{
-    DisplacedSurface, DisplacementError, MAX_TEXEL_COORDINATE, RootNodes, SurfaceHit, TexelPart,
-    TraversalStats,
-};
-pub use distance_map::DistanceMap;
-pub use geometry_image::{GeometryImage, GeometryImageError, GeometryImageHit};
+pub use cells::{CellTriangle, traverse_cells, uv_in_cells};
+pub use displacement::{DisplacedSurface, DisplacementError, SurfaceHit, TexelPart};
 pub use heightfield::{HEIGHT_ONE, HeightField, HeightMapError, Wrap};
-pub use march::MarchOptions;
 pub use mesh::{BaseMesh, MeshError, prism_bounds};
-pub use projective::ProjectiveSurface;
 pub use shell::{ShellError, ShellHit, ShellObject, ShellSurface};
-pub use volume::VoxelObject;
+pub use stats::TraversalStats;
+pub use tlas::{MAX_TEXEL_COORDINATE, RootNodes};

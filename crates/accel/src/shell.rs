@@ -8,14 +8,15 @@ use alloc::vec::Vec;
 use core::fmt;
 use nlrt_poly::{Real, Vector3};
 use nlrt_shellmap::{
-    BaseEdges, Hit, NonlinearRay, Prism, Ray, TextureCurve, TexturePlane, intersect_microtriangle,
-    world_normal,
+    BaseEdges, Hit, NonlinearRay, Prism, Ray, TextureCurve, TexturePlane, facing_unit,
+    intersect_microtriangle, world_normal,
 };
 
 use crate::bvh::{Aabb, Bvh4};
-use crate::cells::{CURVE_STACK, PrismTlas, SetupError, facing_unit, walk_cells};
-use crate::displacement::{MAX_TEXEL_COORDINATE, RootNodes, TraversalStats};
+use crate::cells::{CURVE_STACK, walk_cells};
 use crate::mesh::BaseMesh;
+use crate::stats::TraversalStats;
+use crate::tlas::{MAX_TEXEL_COORDINATE, PrismTlas, RootNodes, SetupError};
 
 /// Why a shell object or surface was rejected.
 #[derive(Clone, Debug, PartialEq)]
@@ -184,6 +185,20 @@ impl<T: Real> ShellSurface<T> {
     #[must_use]
     pub fn prism(&self, i: usize) -> Prism<T> {
         self.prisms.prism(i)
+    }
+
+    /// TLAS traversal over the prisms, as [`DisplacedSurface::traverse_prisms`]
+    /// (`per_prism(triangle, prism, t_max)` per prism box entered, nearest hit returned).
+    ///
+    /// [`DisplacedSurface::traverse_prisms`]: crate::DisplacedSurface::traverse_prisms
+    pub fn traverse_prisms<H>(
+        &self,
+        ray: &Ray<T>,
+        t_min: T,
+        t_max: T,
+        per_prism: impl FnMut(usize, &Prism<T>, T) -> Option<(H, T)>,
+    ) -> Option<H> {
+        self.prisms.traverse(ray, t_min, t_max, per_prism)
     }
 
     /// Bytes of acceleration data: object and its BVH (once), TLAS, roots. The quadtree

@@ -6,7 +6,8 @@
 
 use crate::scenes::{Content, Scene};
 use crate::trace::{TraceHit, Tracer, ray_in};
-use nlrt_accel::{GeometryImage, HEIGHT_ONE};
+use nlrt_accel::HEIGHT_ONE;
+use nlrt_baselines::GeometryImage;
 use nlrt_poly::glam::{DVec2, DVec3};
 use nlrt_poly::{Real, Vector3};
 

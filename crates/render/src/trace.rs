@@ -7,10 +7,11 @@
 use crate::resample::GeometryImageTracer;
 use crate::scenes::{Content, Scene};
 use crate::tessellate::Tessellated;
-use nlrt_accel::{
-    ConeMap, ConeOptions, ConeTracing, DisplacedSurface, DistanceMap, HeightField, MarchOptions,
-    ProjectiveSurface, Rectification, ShellObject, ShellSurface, TraversalStats, VertexQuadrics,
-    VoxelObject,
+use nlrt_accel::{DisplacedSurface, HeightField, ShellObject, ShellSurface, TraversalStats};
+use nlrt_baselines::{
+    AffineTracing as _, ConeMap, ConeOptions, ConeTraced as _, ConeTracing, DistanceMap,
+    MarchOptions, Marching as _, ProjectiveSurface, Rectification, TetrahedralShells as _,
+    VertexQuadrics, VoxelMarching as _, VoxelObject,
 };
 use nlrt_poly::glam::DVec3;
 use nlrt_poly::{Real, Vector3};
@@ -462,7 +463,7 @@ impl<T: Real> Tracer for TessellationFree<T> {
         let (ray, t_min, t_max) = ray_in::<T>(origin, dir, t_min, t_max)?;
         let mut stats = TraversalStats::default();
         let hit = self.0.intersect_affine(&ray, t_min, t_max, &mut stats)?;
-        let n = DisplacedSurface::affine_normal(&hit, ray.dir)?;
+        let n = hit.facing_normal(ray.dir)?;
         Some(TraceHit::from_precision::<T>(hit.t, n, hit.triangle))
     }
 

@@ -21,7 +21,8 @@
 
 use crate::scenes::{Content, Scene};
 use crate::trace::{Method, Nonlinear};
-use nlrt_accel::{Aabb, Bvh4, MarchOptions, SlabRay, TraversalStats, Wrap};
+use nlrt_accel::{Aabb, Bvh4, SlabRay, TraversalStats, Wrap};
+use nlrt_baselines::{AffineTracing as _, MarchOptions, Marching as _, TetrahedralShells as _};
 use nlrt_oracle::crossing::ray_triangle;
 use nlrt_poly::glam::{DVec2, DVec3};
 use nlrt_poly::{Real, Vector2, Vector3};

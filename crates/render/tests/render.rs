@@ -403,7 +403,7 @@ fn curved_shell_mapping_agrees_with_its_own_reference() {
 /// rectifications alike.
 #[test]
 fn cone_tracing_silhouette_correction_cuts_the_mismatches_on_the_cylinder() {
-    use nlrt_accel::Rectification;
+    use nlrt_baselines::Rectification;
     use nlrt_render::trace::ConeTracer;
     let scene = scenes::cylinder(128);
     let opts = RenderOptions {

@@ -39,7 +39,7 @@ mod ray;
 pub use aabb::{BoxSpan, TextureCurve, intersect_box};
 pub use curved::coons_displacement;
 pub use microtriangle::{
-    Hit, TexturePlane, alpha_beta_eq11, inside_triangle, intersect_flat_microtriangle,
+    Hit, TexturePlane, alpha_beta_eq11, facing_unit, inside_triangle, intersect_flat_microtriangle,
     intersect_flat_texel, intersect_microtriangle, world_normal,
 };
 pub use prism::{Canonical, Prism};

@@ -289,3 +289,15 @@ pub fn world_normal<T: Real>(
     // M^-T has columns (E1 x Ns, Ns x E0, E0 x E1) / det M.
     e1.cross(ns) * plane_abh[0] + ns.cross(e0) * plane_abh[1] + e0.cross(e1) * plane_abh[2]
 }
+
+/// `n` (a world normal from Eq. 13, any length and sign) as a unit vector facing against the
+/// ray direction `dir`; `None` where it is zero (the shell degenerates to a line or point).
+#[must_use]
+pub fn facing_unit<T: Real>(n: T::Vec3, dir: T::Vec3) -> Option<T::Vec3> {
+    let len = n.length();
+    if !(len > T::ZERO && len.is_finite()) {
+        return None;
+    }
+    let n = n * (T::ONE / len);
+    Some(if n.dot(dir) > T::ZERO { -n } else { n })
+}

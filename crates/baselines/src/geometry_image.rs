@@ -13,7 +13,7 @@ use alloc::vec::Vec;
 use nlrt_poly::{Real, Vector3};
 use nlrt_shellmap::Ray;
 
-use crate::bvh::{Aabb, SlabRay, ray_triangle};
+use nlrt_accel::{Aabb, SlabRay, ray_triangle};
 
 /// Why a geometry image was rejected.
 #[derive(Clone, Debug, PartialEq, Eq)]

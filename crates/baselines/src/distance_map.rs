@@ -14,7 +14,7 @@ use alloc::vec;
 use alloc::vec::Vec;
 use nlrt_poly::Real;
 
-use crate::{HEIGHT_ONE, HeightField, Wrap};
+use nlrt_accel::{HEIGHT_ONE, HeightField, Wrap};
 
 /// Largest radius stored (cells): beyond it the box test costs more than the jumps save.
 pub const MAX_RADIUS: u8 = 31;
@@ -40,7 +40,8 @@ impl DistanceMap {
     /// texels (maps have power-of-two sides).
     ///
     /// ```
-    /// use nlrt_accel::{DistanceMap, HeightField, Wrap};
+    /// use nlrt_accel::{HeightField, Wrap};
+    /// use nlrt_baselines::DistanceMap;
     /// // A single spike in the middle of a flat map at height 0.
     /// let mut heights = vec![0.0; 64 * 64];
     /// heights[32 * 64 + 32] = 1.0;

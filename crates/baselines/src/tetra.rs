@@ -11,8 +11,9 @@
 use nlrt_poly::{Real, Vector2, Vector3};
 use nlrt_shellmap::{Prism, Ray};
 
-use crate::displacement::{DisplacedSurface, SurfaceHit, TraversalStats};
-use crate::march::MarchOptions;
+use nlrt_accel::{DisplacedSurface, SurfaceHit, TraversalStats};
+
+use crate::march::{MarchOptions, SampledSurface};
 
 /// Binary-search steps refining a hit between two samples.
 const REFINE_STEPS: usize = 10;
@@ -32,12 +33,24 @@ fn tetrahedra(global: [u32; 3]) -> [[usize; 4]; 3] {
     ]
 }
 
-impl<T: Real> DisplacedSurface<T> {
+/// Tetrahedral shells (Porumbescu et al. 2005) on the paper's [`DisplacedSurface`]: each prism split into three affinely mapped tetrahedra.
+pub trait TetrahedralShells<T: Real> {
     /// The nearest hit of `ray` with `t` in `(t_min, t_max)` on the tetrahedral shell (see
     /// the module documentation); `opts` sets the sampling as for
-    /// [`DisplacedSurface::intersect_marching`] (its angle limit is unused: the map is
+    /// [`Marching::intersect_marching`](crate::Marching::intersect_marching) (its angle limit is unused: the map is
     /// affine per tetrahedron, so the texture-space segment is exact).
-    pub fn intersect_tetrahedra(
+    fn intersect_tetrahedra(
+        &self,
+        ray: &Ray<T>,
+        t_min: T,
+        t_max: T,
+        opts: &MarchOptions,
+        stats: &mut TraversalStats,
+    ) -> Option<SurfaceHit<T>>;
+}
+
+impl<T: Real> TetrahedralShells<T> for DisplacedSurface<T> {
+    fn intersect_tetrahedra(
         &self,
         ray: &Ray<T>,
         t_min: T,
@@ -45,23 +58,40 @@ impl<T: Real> DisplacedSurface<T> {
         opts: &MarchOptions,
         stats: &mut TraversalStats,
     ) -> Option<SurfaceHit<T>> {
-        self.prisms
-            .traverse(ray, t_min, t_max, |tri, prism, t_max| {
-                stats.prism_tests += 1;
-                let global = self.prisms.mesh.triangle(tri);
-                let mut best: Option<SurfaceHit<T>> = None;
-                for tet in tetrahedra(global) {
-                    let limit = best.map_or(t_max, |b| b.hit.t);
-                    if let Some(hit) =
-                        self.march_tetrahedron(tri, prism, &tet, ray, t_min, limit, opts, stats)
-                    {
-                        best = Some(hit);
-                    }
+        self.traverse_prisms(ray, t_min, t_max, |tri, prism, t_max| {
+            stats.prism_tests += 1;
+            let global = self.mesh().triangle(tri);
+            let mut best: Option<SurfaceHit<T>> = None;
+            for tet in tetrahedra(global) {
+                let limit = best.map_or(t_max, |b| b.hit.t);
+                if let Some(hit) =
+                    self.march_tetrahedron(tri, prism, &tet, ray, t_min, limit, opts, stats)
+                {
+                    best = Some(hit);
                 }
-                best.map(|b| (b, b.hit.t))
-            })
+            }
+            best.map(|b| (b, b.hit.t))
+        })
     }
+}
 
+/// The steps of [`TetrahedralShells`].
+pub(crate) trait TetraParts<T: Real> {
+    #[allow(clippy::too_many_arguments)]
+    fn march_tetrahedron(
+        &self,
+        tri: usize,
+        prism: &Prism<T>,
+        tet: &[usize; 4],
+        ray: &Ray<T>,
+        t_min: T,
+        t_max: T,
+        opts: &MarchOptions,
+        stats: &mut TraversalStats,
+    ) -> Option<SurfaceHit<T>>;
+}
+
+impl<T: Real> TetraParts<T> for DisplacedSurface<T> {
     #[allow(clippy::too_many_arguments)]
     fn march_tetrahedron(
         &self,
@@ -247,7 +277,8 @@ mod tests {
 #[cfg(test)]
 mod degenerate {
     use super::*;
-    use crate::{HeightField, Wrap};
+    use crate::Marching;
+    use nlrt_accel::{HeightField, Wrap};
     use nlrt_poly::glam::DVec3;
 
     /// A base triangle of zero world area (a line) has flat tetrahedra and flat prisms: the

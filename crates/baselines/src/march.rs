@@ -16,10 +16,12 @@
 use nlrt_poly::{Real, Vector2, Vector3};
 use nlrt_shellmap::{Hit, Prism, PrismSpan, Ray, intersect_prism};
 
-use crate::DistanceMap;
-use crate::displacement::{DisplacedSurface, SurfaceHit, TexelPart, TraversalStats};
+use nlrt_accel::{DisplacedSurface, SurfaceHit, TexelPart, TraversalStats};
+use nlrt_shellmap::facing_unit;
 
-/// Settings of [`DisplacedSurface::intersect_marching`].
+use crate::DistanceMap;
+
+/// Settings of [`Marching::intersect_marching`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MarchOptions {
     /// Samples per texel crossed in uv (at least 1; more misses fewer thin features).
@@ -109,7 +111,7 @@ pub(crate) fn sample_count(cells: f64, opts: &MarchOptions) -> usize {
 
 /// What [`DisplacedSurface::march_prism`] samples.
 #[derive(Clone, Copy, Debug)]
-enum Marched<'a> {
+pub(crate) enum Marched<'a> {
     /// The smooth shell, fixed steps.
     Smooth,
     /// The smooth shell, steps lengthened by a distance map.
@@ -118,101 +120,66 @@ enum Marched<'a> {
     Curved,
 }
 
-impl<T: Real> DisplacedSurface<T> {
-    /// The nearest hit of a per-prism method: TLAS traversal (nearest first), the exact
-    /// ray-prism test, then `method(triangle, prism, span, stats)` on the prism's span; hits
-    /// outside `(t_min, t_max)` (shrunk as hits are found) are dropped.
-    pub(crate) fn per_prism_span(
+/// Shell mapping by ray marching (Jeschke et al. 2007) on the paper's [`DisplacedSurface`]: smooth, curved, and accelerated by a distance map.
+pub trait Marching<T: Real> {
+    /// The nearest hit of `ray` with `t` in `(t_min, t_max)` by smooth shell mapping with
+    /// ray marching (Jeschke et al. 2007; see the module documentation).
+    fn intersect_marching(
         &self,
         ray: &Ray<T>,
         t_min: T,
         t_max: T,
+        opts: &MarchOptions,
         stats: &mut TraversalStats,
-        mut method: impl FnMut(
-            usize,
-            &Prism<T>,
-            &PrismSpan<T>,
-            &mut TraversalStats,
-        ) -> Option<SurfaceHit<T>>,
-    ) -> Option<SurfaceHit<T>> {
-        self.prisms
-            .traverse(ray, t_min, t_max, |tri, prism, t_max| {
-                stats.prism_tests += 1;
-                let span = intersect_prism(prism, ray, t_min, t_max)?;
-                let hit = method(tri, prism, &span, stats)?;
-                (hit.hit.t > t_min && hit.hit.t < t_max).then_some((hit, hit.hit.t))
-            })
-    }
+    ) -> Option<SurfaceHit<T>>;
 
-    /// Sample steps for a texture-space segment from `a` to `b` ([`sample_count`] of the
-    /// texels crossed along its longer axis).
-    pub(crate) fn sample_steps(&self, a: T::Vec2, b: T::Vec2, opts: &MarchOptions) -> usize {
-        let texels = ((b.x() - a.x()).abs().max((b.y() - a.y()).abs()) / self.texel_size).to_f64();
-        sample_count(texels, opts)
-    }
-
-    /// The hit of a sampling method at canonical point `c` (alpha, beta, h) at distance `t`,
-    /// with the texel and part that hold it.
-    pub(crate) fn sampled_hit(
+    /// The nearest hit of `ray` with `t` in `(t_min, t_max)` by curved shell mapping
+    /// (Jeschke et al. 2007, sec. 3.2 and 4.5): marched like
+    /// [`Marching::intersect_marching`], each sample's texture height by the paper's
+    /// Eq. 2 ([`Prism::curved_texture_height`]) between the Coons-patch surfaces of heights 0
+    /// and 1. The surface is `Phi_c(u, v, height(u, v))`, a different one from the smooth
+    /// shell's: its parts that bend out of the prism (curvature beyond the height compression
+    /// `w / 2 + 1 / 4`) are not found, as in the paper. The hit's `h` is the texture height;
+    /// [`Marching::curved_normal`] gives its normal.
+    fn intersect_curved_marching(
         &self,
-        tri: usize,
-        prism: &Prism<T>,
-        c: [T; 3],
-        t: T,
-    ) -> SurfaceHit<T> {
-        let uv = prism.texture_uv(c[0], c[1]);
-        let (_, texel, part) = self.surface_height(uv.x(), uv.y());
-        SurfaceHit {
-            hit: Hit::at(prism, t, c[0], c[1], c[2]),
-            triangle: tri as u32,
-            texel,
-            part,
-        }
-    }
+        ray: &Ray<T>,
+        t_min: T,
+        t_max: T,
+        opts: &MarchOptions,
+        stats: &mut TraversalStats,
+    ) -> Option<SurfaceHit<T>>;
 
-    /// The height of the surface at texture point `(u, v)` and which part of which texel
-    /// holds it (the microtriangles of [`DisplacedSurface::intersect`]).
-    pub(crate) fn surface_height(&self, u: T, v: T) -> (T, [i32; 2], TexelPart) {
-        let (fu, fv) = (u / self.texel_size, v / self.texel_size);
-        let floor = |x: T| {
-            let i = x.to_f64() as i32;
-            // Saturating: a coordinate below i32's range (a degenerate prism) stays in it.
-            if T::from_i32(i) > x {
-                i.saturating_sub(1)
-            } else {
-                i
-            }
-        };
-        let (x, y) = (floor(fu), floor(fv));
-        let (a, b) = (fu - T::from_i32(x), fv - T::from_i32(y));
-        let [h00, h10, h01, h11] = self
-            .field
-            .texel_corners(i64::from(x), i64::from(y))
-            .map(Self::height);
-        let flat = h00 == h10 && h00 == h01 && h00 == h11;
-        if flat {
-            return (h00, [x, y], TexelPart::Flat);
-        }
-        if a >= b {
-            // (0,0), (1,0), (1,1)
-            (
-                h00 + (h10 - h00) * a + (h11 - h10) * b,
-                [x, y],
-                TexelPart::Lower,
-            )
-        } else {
-            // (0,0), (1,1), (0,1)
-            (
-                h00 + (h11 - h01) * a + (h01 - h00) * b,
-                [x, y],
-                TexelPart::Upper,
-            )
-        }
-    }
+    /// The nearest hit of `ray` with `t` in `(t_min, t_max)` by smooth shell mapping with ray
+    /// marching accelerated by the 3D distance map `map` of this surface's height field (sec.
+    /// 4.4): where the sample's cell has an empty radius longer than the fixed step, the
+    /// march jumps that far along its texture-space path; the last step before a hit is
+    /// always a fixed one, so the hits are those of
+    /// [`Marching::intersect_marching`] except where the correction of sec. 4.3 moved
+    /// a sample off the path (as in the paper, the jumps are safe on the path, not off it),
+    /// and where a feature is thinner than a step: the jumps shift the sampling phase, so
+    /// either marcher may catch a thin tip the other steps over.
+    fn intersect_sphere_traced(
+        &self,
+        ray: &Ray<T>,
+        t_min: T,
+        t_max: T,
+        map: &DistanceMap,
+        opts: &MarchOptions,
+        stats: &mut TraversalStats,
+    ) -> Option<SurfaceHit<T>>;
 
-    /// The nearest hit of `ray` with `t` in `(t_min, t_max)` by smooth shell mapping with
-    /// ray marching (Jeschke et al. 2007; see the module documentation).
-    pub fn intersect_marching(
+    /// The world-space unit normal at a hit of [`Marching::intersect_curved_marching`],
+    /// facing against `dir`: that of the curved images of the hit microtriangle's corners
+    /// (the flat triangle the pre-tessellated curved reference holds). On a uv-degenerate
+    /// base triangle (no inverse of Eq. 2-3 for the corners) the normal of the shell's triangle
+    /// at the hit's height instead. `None` where the shell degenerates.
+    #[must_use]
+    fn curved_normal(&self, hit: &SurfaceHit<T>, dir: T::Vec3) -> Option<T::Vec3>;
+}
+
+impl<T: Real> Marching<T> for DisplacedSurface<T> {
+    fn intersect_marching(
         &self,
         ray: &Ray<T>,
         t_min: T,
@@ -225,15 +192,7 @@ impl<T: Real> DisplacedSurface<T> {
         })
     }
 
-    /// The nearest hit of `ray` with `t` in `(t_min, t_max)` by curved shell mapping
-    /// (Jeschke et al. 2007, sec. 3.2 and 4.5): marched like
-    /// [`DisplacedSurface::intersect_marching`], each sample's texture height by the paper's
-    /// Eq. 2 ([`Prism::curved_texture_height`]) between the Coons-patch surfaces of heights 0
-    /// and 1. The surface is `Phi_c(u, v, height(u, v))`, a different one from the smooth
-    /// shell's: its parts that bend out of the prism (curvature beyond the height compression
-    /// `w / 2 + 1 / 4`) are not found, as in the paper. The hit's `h` is the texture height;
-    /// [`DisplacedSurface::curved_normal`] gives its normal.
-    pub fn intersect_curved_marching(
+    fn intersect_curved_marching(
         &self,
         ray: &Ray<T>,
         t_min: T,
@@ -246,16 +205,7 @@ impl<T: Real> DisplacedSurface<T> {
         })
     }
 
-    /// The nearest hit of `ray` with `t` in `(t_min, t_max)` by smooth shell mapping with ray
-    /// marching accelerated by the 3D distance map `map` of this surface's height field (sec.
-    /// 4.4): where the sample's cell has an empty radius longer than the fixed step, the
-    /// march jumps that far along its texture-space path; the last step before a hit is
-    /// always a fixed one, so the hits are those of
-    /// [`DisplacedSurface::intersect_marching`] except where the correction of sec. 4.3 moved
-    /// a sample off the path (as in the paper, the jumps are safe on the path, not off it),
-    /// and where a feature is thinner than a step: the jumps shift the sampling phase, so
-    /// either marcher may catch a thin tip the other steps over.
-    pub fn intersect_sphere_traced(
+    fn intersect_sphere_traced(
         &self,
         ray: &Ray<T>,
         t_min: T,
@@ -277,13 +227,7 @@ impl<T: Real> DisplacedSurface<T> {
         })
     }
 
-    /// The world-space unit normal at a hit of [`DisplacedSurface::intersect_curved_marching`],
-    /// facing against `dir`: that of the curved images of the hit microtriangle's corners
-    /// (the flat triangle the pre-tessellated curved reference holds). On a uv-degenerate
-    /// base triangle (no inverse of Eq. 2-3 for the corners) the normal of the shell's triangle
-    /// at the hit's height instead. `None` where the shell degenerates.
-    #[must_use]
-    pub fn curved_normal(&self, hit: &SurfaceHit<T>, dir: T::Vec3) -> Option<T::Vec3> {
+    fn curved_normal(&self, hit: &SurfaceHit<T>, dir: T::Vec3) -> Option<T::Vec3> {
         let prism = self.prism(hit.triangle as usize);
         let (t0, e0, e1) = (
             prism.uv[0],
@@ -294,7 +238,7 @@ impl<T: Real> DisplacedSurface<T> {
         if !(det != T::ZERO && det.is_finite()) {
             let layer = [0, 1, 2].map(|i| prism.vertex(i, hit.hit.h * T::HALF + T::HALF * T::HALF));
             let n = (layer[1] - layer[0]).cross(layer[2] - layer[0]);
-            return crate::cells::facing_unit::<T>(n, dir);
+            return facing_unit::<T>(n, dir);
         }
         let world = |u: T, v: T, h: T| {
             let (du, dv) = (u - t0.x(), v - t0.y());
@@ -312,7 +256,120 @@ impl<T: Real> DisplacedSurface<T> {
             [world(u0, v0, h00), world(u1, v1, h11), world(u0, v1, h01)]
         };
         let n = (corners[1] - corners[0]).cross(corners[2] - corners[0]);
-        crate::cells::facing_unit::<T>(n, dir)
+        facing_unit::<T>(n, dir)
+    }
+}
+
+/// The parts of [`Marching`] that other methods of this crate reuse.
+pub(crate) trait SampledSurface<T: Real> {
+    fn per_prism_span(
+        &self,
+        ray: &Ray<T>,
+        t_min: T,
+        t_max: T,
+        stats: &mut TraversalStats,
+        method: impl FnMut(
+            usize,
+            &Prism<T>,
+            &PrismSpan<T>,
+            &mut TraversalStats,
+        ) -> Option<SurfaceHit<T>>,
+    ) -> Option<SurfaceHit<T>>;
+
+    fn sample_steps(&self, a: T::Vec2, b: T::Vec2, opts: &MarchOptions) -> usize;
+
+    fn sampled_hit(&self, tri: usize, prism: &Prism<T>, c: [T; 3], t: T) -> SurfaceHit<T>;
+
+    fn surface_height(&self, u: T, v: T) -> (T, [i32; 2], TexelPart);
+
+    #[allow(clippy::too_many_arguments)]
+    fn march_prism(
+        &self,
+        tri: usize,
+        prism: &Prism<T>,
+        ray: &Ray<T>,
+        span: &PrismSpan<T>,
+        opts: &MarchOptions,
+        shell: Marched<'_>,
+        stats: &mut TraversalStats,
+    ) -> Option<SurfaceHit<T>>;
+}
+
+impl<T: Real> SampledSurface<T> for DisplacedSurface<T> {
+    fn per_prism_span(
+        &self,
+        ray: &Ray<T>,
+        t_min: T,
+        t_max: T,
+        stats: &mut TraversalStats,
+        mut method: impl FnMut(
+            usize,
+            &Prism<T>,
+            &PrismSpan<T>,
+            &mut TraversalStats,
+        ) -> Option<SurfaceHit<T>>,
+    ) -> Option<SurfaceHit<T>> {
+        self.traverse_prisms(ray, t_min, t_max, |tri, prism, t_max| {
+            stats.prism_tests += 1;
+            let span = intersect_prism(prism, ray, t_min, t_max)?;
+            let hit = method(tri, prism, &span, stats)?;
+            (hit.hit.t > t_min && hit.hit.t < t_max).then_some((hit, hit.hit.t))
+        })
+    }
+
+    fn sample_steps(&self, a: T::Vec2, b: T::Vec2, opts: &MarchOptions) -> usize {
+        let texels =
+            ((b.x() - a.x()).abs().max((b.y() - a.y()).abs()) / self.texel_size()).to_f64();
+        sample_count(texels, opts)
+    }
+
+    fn sampled_hit(&self, tri: usize, prism: &Prism<T>, c: [T; 3], t: T) -> SurfaceHit<T> {
+        let uv = prism.texture_uv(c[0], c[1]);
+        let (_, texel, part) = self.surface_height(uv.x(), uv.y());
+        SurfaceHit {
+            hit: Hit::at(prism, t, c[0], c[1], c[2]),
+            triangle: tri as u32,
+            texel,
+            part,
+        }
+    }
+
+    fn surface_height(&self, u: T, v: T) -> (T, [i32; 2], TexelPart) {
+        let (fu, fv) = (u / self.texel_size(), v / self.texel_size());
+        let floor = |x: T| {
+            let i = x.to_f64() as i32;
+            // Saturating: a coordinate below i32's range (a degenerate prism) stays in it.
+            if T::from_i32(i) > x {
+                i.saturating_sub(1)
+            } else {
+                i
+            }
+        };
+        let (x, y) = (floor(fu), floor(fv));
+        let (a, b) = (fu - T::from_i32(x), fv - T::from_i32(y));
+        let [h00, h10, h01, h11] = self
+            .field()
+            .texel_corners(i64::from(x), i64::from(y))
+            .map(Self::height);
+        let flat = h00 == h10 && h00 == h01 && h00 == h11;
+        if flat {
+            return (h00, [x, y], TexelPart::Flat);
+        }
+        if a >= b {
+            // (0,0), (1,0), (1,1)
+            (
+                h00 + (h10 - h00) * a + (h11 - h10) * b,
+                [x, y],
+                TexelPart::Lower,
+            )
+        } else {
+            // (0,0), (1,1), (0,1)
+            (
+                h00 + (h11 - h01) * a + (h01 - h00) * b,
+                [x, y],
+                TexelPart::Upper,
+            )
+        }
     }
 
     #[allow(clippy::too_many_arguments)]
@@ -389,7 +446,7 @@ impl<T: Real> Medium<T> for HeightMedium<'_, T> {
         let Marched::DistanceMap(map) = self.shell else {
             return T::ZERO;
         };
-        let size = self.surface.texel_size;
+        let size = self.surface.texel_size();
         let (a, b) = (
             prism.texture_uv(current[0], current[1]),
             prism.texture_uv(end[0], end[1]),
@@ -508,7 +565,7 @@ pub(crate) fn march_segment<T: Real>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{HeightField, Wrap};
+    use nlrt_accel::{HeightField, Wrap};
     use nlrt_poly::glam::{DVec2, DVec3};
 
     #[test]
@@ -586,8 +643,8 @@ mod tests {
 #[cfg(test)]
 mod agreement {
     use super::*;
-    use crate::{HeightField, Wrap};
     use alloc::vec::Vec;
+    use nlrt_accel::{HeightField, Wrap};
     use nlrt_poly::glam::DVec3;
 
     /// On a smooth map (features much wider than a sample step) over affine prisms (a plane

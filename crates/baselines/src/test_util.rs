@@ -3,7 +3,7 @@
 use alloc::vec;
 use nlrt_poly::glam::{DVec2, DVec3};
 
-use crate::mesh::BaseMesh;
+use nlrt_accel::{BaseMesh, DisplacedSurface, HEIGHT_ONE, HeightField, Wrap};
 
 /// The unit square `[0, 1]^2` at `z = 0` as two triangles, uvs equal to `(x, y)`, every vertex
 /// normal `normal`.
@@ -43,12 +43,12 @@ pub(crate) fn world_line_triangle() -> BaseMesh<f64> {
 
 /// The unit square with normals `+z`, height scale 1, under a constant map at `height`; with
 /// the height as stored (16-bit).
-pub(crate) fn flat_map_square(height: f32) -> (crate::DisplacedSurface<f64>, f64) {
+pub(crate) fn flat_map_square(height: f32) -> (DisplacedSurface<f64>, f64) {
     let mesh = unit_square(DVec3::Z, [[0, 1, 2], [0, 2, 3]]);
-    let field = crate::HeightField::from_unit_heights(16, &[height; 256], crate::Wrap::Clamp)
-        .expect("a valid map");
-    let stored = f64::from(field.sample(0, 0)) / f64::from(crate::HEIGHT_ONE);
-    let surface = crate::DisplacedSurface::new(mesh, field, 1.0, 1.0).expect("a valid surface");
+    let field =
+        HeightField::from_unit_heights(16, &[height; 256], Wrap::Clamp).expect("a valid map");
+    let stored = f64::from(field.sample(0, 0)) / f64::from(HEIGHT_ONE);
+    let surface = DisplacedSurface::new(mesh, field, 1.0, 1.0).expect("a valid surface");
     (surface, stored)
 }
 

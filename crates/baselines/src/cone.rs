@@ -32,8 +32,11 @@ use alloc::vec::Vec;
 use nlrt_poly::{Real, Vector2, Vector3};
 use nlrt_shellmap::{Hit, PrismSpan, Ray};
 
-use crate::displacement::{DisplacedSurface, SurfaceHit, TraversalStats};
-use crate::{BaseMesh, HEIGHT_ONE, HeightField, Wrap};
+use nlrt_accel::{
+    BaseMesh, DisplacedSurface, HEIGHT_ONE, HeightField, SurfaceHit, TraversalStats, Wrap,
+};
+
+use crate::march::SampledSurface;
 
 /// The cone map of a height field: per sample the conservative cone ratio (see the module
 /// documentation).
@@ -78,7 +81,8 @@ impl ConeMap {
     /// The cone map of `field` (all rows).
     ///
     /// ```
-    /// use nlrt_accel::{ConeMap, HeightField, Wrap};
+    /// use nlrt_accel::{HeightField, Wrap};
+    /// use nlrt_baselines::ConeMap;
     /// // One spike of height 1 at (8, 8) on a flat map of height 0.5.
     /// let mut heights = vec![0.5; 16 * 16];
     /// heights[8 * 16 + 8] = 1.0;
@@ -375,7 +379,7 @@ pub enum Rectification {
     Cone,
 }
 
-/// Settings of [`DisplacedSurface::intersect_cone_traced`].
+/// Settings of [`ConeTraced::intersect_cone_traced`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ConeOptions {
     /// The quadric's way into the march.
@@ -426,11 +430,23 @@ impl<T: Real> ConeTracing<T> {
 /// Binary-search steps refining a crossing between two samples.
 const REFINE_STEPS: usize = 10;
 
-impl<T: Real> DisplacedSurface<T> {
+/// Cone tracing with correct silhouettes (Ouazzani Chahdi et al. 2021) on the paper's [`DisplacedSurface`].
+pub trait ConeTraced<T: Real> {
     /// The nearest hit of `ray` with `t` in `(t_min, t_max)` by cone tracing with silhouettes
     /// (see the module documentation), with `cone` built from this surface's height field and
     /// mesh.
-    pub fn intersect_cone_traced(
+    fn intersect_cone_traced(
+        &self,
+        ray: &Ray<T>,
+        t_min: T,
+        t_max: T,
+        cone: &ConeTracing<T>,
+        stats: &mut TraversalStats,
+    ) -> Option<SurfaceHit<T>>;
+}
+
+impl<T: Real> ConeTraced<T> for DisplacedSurface<T> {
+    fn intersect_cone_traced(
         &self,
         ray: &Ray<T>,
         t_min: T,
@@ -442,7 +458,21 @@ impl<T: Real> DisplacedSurface<T> {
             self.cone_trace_prism(tri, ray, span, cone, stats)
         })
     }
+}
 
+/// The steps of [`ConeTraced`].
+pub(crate) trait ConeParts<T: Real> {
+    fn cone_trace_prism(
+        &self,
+        tri: usize,
+        ray: &Ray<T>,
+        span: &PrismSpan<T>,
+        cone: &ConeTracing<T>,
+        stats: &mut TraversalStats,
+    ) -> Option<SurfaceHit<T>>;
+}
+
+impl<T: Real> ConeParts<T> for DisplacedSurface<T> {
     fn cone_trace_prism(
         &self,
         tri: usize,
@@ -501,7 +531,7 @@ impl<T: Real> DisplacedSurface<T> {
         let length = span.t_out - span.t_in;
         let uv_of = |a: T, b: T| {
             let uv = prism.texture_uv(a, b);
-            (uv.x() / self.texel_size, uv.y() / self.texel_size)
+            (uv.x() / self.texel_size(), uv.y() / self.texel_size())
         };
         let (x0, y0) = uv_of(a0, b0);
         let (x1, y1) = uv_of(a0 + da, b0 + db);

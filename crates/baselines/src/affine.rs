@@ -9,17 +9,18 @@
 //!
 //! It needs the inverse of Eq. 2-3 (uv to barycentric) to place a uv square in world space:
 //! a base triangle whose uvs are degenerate (a line or a point) has none, and is not rendered
-//! ([`DisplacedSurface::intersect_affine`] documents the outcome; the report measures it).
+//! ([`AffineTracing::intersect_affine`] documents the outcome; the report measures it).
 
 use nlrt_poly::{Real, Vector3};
 use nlrt_shellmap::{Prism, Ray};
 
-use crate::bvh::{SlabRay, ray_triangle};
-use crate::cells::{facing_unit, traverse_cells, uv_in_cells};
-use crate::displacement::CellTriangle;
-use crate::displacement::{DisplacedSurface, TexelPart, TraversalStats};
+use nlrt_accel::{
+    CellTriangle, DisplacedSurface, SlabRay, TexelPart, TraversalStats, ray_triangle,
+    traverse_cells, uv_in_cells,
+};
+use nlrt_shellmap::facing_unit;
 
-/// A hit of [`DisplacedSurface::intersect_affine`]: a flat world-space microtriangle.
+/// A hit of [`AffineTracing::intersect_affine`]: a flat world-space microtriangle.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct AffineHit<T: Real> {
     /// Ray parameter.
@@ -34,10 +35,19 @@ pub struct AffineHit<T: Real> {
     pub part: TexelPart,
 }
 
+impl<T: Real> AffineHit<T> {
+    /// The unit normal of the hit microtriangle facing against `dir` (`None` for a
+    /// microtriangle of zero area).
+    #[must_use]
+    pub fn facing_normal(&self, dir: T::Vec3) -> Option<T::Vec3> {
+        facing_unit::<T>(self.normal, dir)
+    }
+}
+
 /// The world-space shell of one base triangle as an affine function of texel coordinates:
 /// `P(u, v) + h N(u, v)` with `P`, `N` affine in `(u, v)` (Eq. 1 composed with the inverse of
 /// Eq. 2-3).
-struct AffineShell<T: Real> {
+pub(crate) struct AffineShell<T: Real> {
     prism: Prism<T>,
     /// uv of vertex 0 in texel units.
     origin: [T; 2],
@@ -162,7 +172,8 @@ impl<T: Real> AffineShell<T> {
     }
 }
 
-impl<T: Real> DisplacedSurface<T> {
+/// Tessellation-free displacement mapping (Thonat et al. 2021) on the paper's [`DisplacedSurface`]: world-space node boxes by affine arithmetic, flat world microtriangles.
+pub trait AffineTracing<T: Real> {
     /// The nearest hit of `ray` with `t` in `[t_min, t_max]` by tessellation-free
     /// displacement mapping (Thonat et al. 2021): TLAS, then per base triangle the implicit
     /// min-max pyramid with world-space node boxes from affine arithmetic (no prism gate, no
@@ -176,6 +187,7 @@ impl<T: Real> DisplacedSurface<T> {
     ///
     /// ```
     /// use nlrt_accel::{BaseMesh, DisplacedSurface, HeightField, TraversalStats, Wrap};
+    /// use nlrt_baselines::AffineTracing;
     /// use nlrt_poly::glam::{DVec2, DVec3};
     /// use nlrt_shellmap::Ray;
     /// // A unit square lifted by a constant height of 0.5 (scale 1).
@@ -191,7 +203,17 @@ impl<T: Real> DisplacedSurface<T> {
     /// let hit = surface.intersect_affine(&ray, 0.0, f64::INFINITY, &mut TraversalStats::default()).unwrap();
     /// assert!((hit.t - 1.5).abs() < 1e-3);
     /// ```
-    pub fn intersect_affine(
+    fn intersect_affine(
+        &self,
+        ray: &Ray<T>,
+        t_min: T,
+        t_max: T,
+        stats: &mut TraversalStats,
+    ) -> Option<AffineHit<T>>;
+}
+
+impl<T: Real> AffineTracing<T> for DisplacedSurface<T> {
+    fn intersect_affine(
         &self,
         ray: &Ray<T>,
         t_min: T,
@@ -199,45 +221,57 @@ impl<T: Real> DisplacedSurface<T> {
         stats: &mut TraversalStats,
     ) -> Option<AffineHit<T>> {
         let slab = SlabRay::new(ray.origin, ray.dir);
-        self.prisms
-            .traverse(ray, t_min, t_max, |tri, prism, t_max| {
-                let uv = uv_in_cells(prism, self.texel_size);
-                let shell = AffineShell::new(prism, uv)?;
-                let mut best = None;
-                traverse_cells(
-                    self.prisms.roots(tri),
-                    &CellTriangle::new(uv),
-                    t_max,
-                    stats,
-                    |level, x, y, t_max| {
-                        let k = 1i64 << level;
-                        let (cx, cy) = (i64::from(x) * k, i64::from(y) * k);
-                        let c = |i: i64| T::from_f64(i as f64);
-                        let [lo, hi] = self.field.texel_bounds(level, i64::from(x), i64::from(y));
-                        let (lo, hi) = shell.node_box(
-                            [c(cx), c(cx + k)],
-                            [c(cy), c(cy + k)],
-                            [Self::height(lo), Self::height(hi)],
-                        )?;
-                        slab.entry(lo, hi, t_min, t_max)
-                    },
-                    |x, y, t_max, stats| {
-                        stats.texel_tests += 1;
-                        let hit = self.affine_texel(&shell, ray, x, y, t_min, t_max)?;
-                        let t = hit.t;
-                        best = Some(AffineHit {
-                            triangle: tri as u32,
-                            ..hit
-                        });
-                        Some(t)
-                    },
-                );
-                best.map(|h: AffineHit<T>| (h, h.t))
-            })
+        self.traverse_prisms(ray, t_min, t_max, |tri, prism, t_max| {
+            let uv = uv_in_cells(prism, self.texel_size());
+            let shell = AffineShell::new(prism, uv)?;
+            let mut best = None;
+            traverse_cells(
+                self.roots(tri),
+                &CellTriangle::new(uv),
+                t_max,
+                stats,
+                |level, x, y, t_max| {
+                    let k = 1i64 << level;
+                    let (cx, cy) = (i64::from(x) * k, i64::from(y) * k);
+                    let c = |i: i64| T::from_f64(i as f64);
+                    let [lo, hi] = self.field().texel_bounds(level, i64::from(x), i64::from(y));
+                    let (lo, hi) = shell.node_box(
+                        [c(cx), c(cx + k)],
+                        [c(cy), c(cy + k)],
+                        [Self::height(lo), Self::height(hi)],
+                    )?;
+                    slab.entry(lo, hi, t_min, t_max)
+                },
+                |x, y, t_max, stats| {
+                    stats.texel_tests += 1;
+                    let hit = self.affine_texel(&shell, ray, x, y, t_min, t_max)?;
+                    let t = hit.t;
+                    best = Some(AffineHit {
+                        triangle: tri as u32,
+                        ..hit
+                    });
+                    Some(t)
+                },
+            );
+            best.map(|h: AffineHit<T>| (h, h.t))
+        })
     }
+}
 
-    /// The nearer hit of texel `(x, y)`'s two world microtriangles with `t` in
-    /// `(t_min, t_max)` and uv inside the base triangle.
+/// The steps of [`AffineTracing`].
+pub(crate) trait AffineParts<T: Real> {
+    fn affine_texel(
+        &self,
+        shell: &AffineShell<T>,
+        ray: &Ray<T>,
+        x: i32,
+        y: i32,
+        t_min: T,
+        t_max: T,
+    ) -> Option<AffineHit<T>>;
+}
+
+impl<T: Real> AffineParts<T> for DisplacedSurface<T> {
     fn affine_texel(
         &self,
         shell: &AffineShell<T>,
@@ -248,7 +282,7 @@ impl<T: Real> DisplacedSurface<T> {
         t_max: T,
     ) -> Option<AffineHit<T>> {
         let [h00, h10, h01, h11] = self
-            .field
+            .field()
             .texel_corners(i64::from(x), i64::from(y))
             .map(Self::height);
         let (u0, v0) = (T::from_i32(x), T::from_i32(y));
@@ -286,20 +320,13 @@ impl<T: Real> DisplacedSurface<T> {
         }
         best
     }
-
-    /// The unit normal of an [`AffineHit`] facing against `dir` (`None` for a microtriangle
-    /// of zero area).
-    #[must_use]
-    pub fn affine_normal(hit: &AffineHit<T>, dir: T::Vec3) -> Option<T::Vec3> {
-        facing_unit::<T>(hit.normal, dir)
-    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{HeightField, Wrap};
     use alloc::vec::Vec;
+    use nlrt_accel::{HeightField, Wrap};
     use nlrt_poly::glam::{DVec2, DVec3};
 
     fn plane(heights: &[f32], side: usize) -> DisplacedSurface<f64> {
@@ -338,7 +365,7 @@ mod tests {
                 for x in 0..n {
                     let k = 1i64 << level;
                     let [lo, hi] = field.texel_bounds(level, x, y);
-                    let h = |s: u16| f64::from(s) / f64::from(crate::HEIGHT_ONE);
+                    let h = |s: u16| f64::from(s) / f64::from(nlrt_accel::HEIGHT_ONE);
                     let (u, v) = (
                         [(x * k) as f64, ((x + 1) * k) as f64],
                         [(y * k) as f64, ((y + 1) * k) as f64],
@@ -371,7 +398,8 @@ mod tests {
                 let (x, y) = ((i % 20) as f64 / 19.0, (i / 20) as f64 / 19.0);
                 let ray: Ray<f64> =
                     Ray::new(DVec3::new(x, y, 3.0), DVec3::new(0.01, -0.02, -1.0)).unwrap();
-                let stored = f64::from(surface.field().sample(0, 0)) / f64::from(crate::HEIGHT_ONE);
+                let stored =
+                    f64::from(surface.field().sample(0, 0)) / f64::from(nlrt_accel::HEIGHT_ONE);
                 // Where the ray crosses the plane z = stored: inside the square, a hit there.
                 let expected = ray.origin + ray.dir * ((ray.origin.z - stored) / -ray.dir.z);
                 let inside = (0.0..=1.0).contains(&expected.x) && (0.0..=1.0).contains(&expected.y);

@@ -19,10 +19,11 @@ use alloc::vec::Vec;
 use nlrt_poly::{Real, Vector2, Vector3};
 use nlrt_shellmap::{Prism, Ray, intersect_prism};
 
-use crate::displacement::{DisplacedSurface, DisplacementError, SurfaceHit, TraversalStats};
-use crate::heightfield::HeightField;
-use crate::march::MarchOptions;
-use crate::mesh::BaseMesh;
+use nlrt_accel::{
+    BaseMesh, DisplacedSurface, DisplacementError, HeightField, SurfaceHit, TraversalStats,
+};
+
+use crate::march::{MarchOptions, SampledSurface};
 
 /// A displaced surface over parallel offset prisms (projective displacement mapping).
 #[derive(Clone, Debug)]
@@ -126,8 +127,7 @@ impl<T: Real> ProjectiveSurface<T> {
         stats: &mut TraversalStats,
     ) -> Option<SurfaceHit<T>> {
         self.surface
-            .prisms
-            .traverse(ray, t_min, t_max, |tri, prism, t_max| {
+            .traverse_prisms(ray, t_min, t_max, |tri, prism, t_max| {
                 stats.prism_tests += 1;
                 let (g, d) = self.planes[tri];
                 if d == T::ZERO {
@@ -217,8 +217,8 @@ impl<T: Real> ProjectiveSurface<T> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::Wrap;
     use alloc::vec;
+    use nlrt_accel::Wrap;
     use nlrt_poly::glam::{DVec2, DVec3};
 
     #[test]

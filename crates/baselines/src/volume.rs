@@ -1,7 +1,7 @@
 //! Volumetric content for ray marching (Jeschke, Mantler and Wimmer 2007, sec. 4.4: "height
 //! fields as well as 3D textures"): an instanced object voxelised in its unit tile, a 3D
 //! texture of occupancy with its distance map, sampled by the same canonical-space marcher as
-//! height fields ([`ShellSurface::intersect_marching`]).
+//! height fields ([`VoxelMarching::intersect_marching`]).
 //!
 //! The voxels are the object's surface (every voxel a triangle passes through, found by
 //! sampling each triangle at half-voxel spacing), not its interior: thin open objects (the
@@ -15,9 +15,9 @@ use alloc::vec::Vec;
 use nlrt_poly::{Real, Vector2, Vector3};
 use nlrt_shellmap::{Hit, Prism, Ray, intersect_prism};
 
-use crate::displacement::TraversalStats;
+use nlrt_accel::{ShellHit, ShellObject, ShellSurface, TraversalStats};
+
 use crate::march::{MarchOptions, Medium, march_segment, sample_count};
-use crate::{ShellHit, ShellObject, ShellSurface};
 
 /// Largest empty radius stored (voxels).
 const MAX_RADIUS: u8 = 15;
@@ -42,7 +42,8 @@ impl VoxelObject {
     /// Voxelises `object` at `res` voxels per axis (at least 1, at most 1024).
     ///
     /// ```
-    /// use nlrt_accel::{ShellObject, VoxelObject};
+    /// use nlrt_accel::ShellObject;
+    /// use nlrt_baselines::VoxelObject;
     /// use nlrt_poly::glam::DVec3;
     /// // A horizontal square at height 0.5 in the tile.
     /// let (a, b, c, d) = (
@@ -215,7 +216,7 @@ impl VoxelObject {
 }
 
 /// The voxels as a marcher sees them.
-struct VoxelMedium<'a> {
+pub(crate) struct VoxelMedium<'a> {
     voxels: &'a VoxelObject,
     jumps: bool,
 }
@@ -273,12 +274,36 @@ impl<T: Real> Medium<T> for VoxelMedium<'_> {
     }
 }
 
-impl<T: Real> ShellSurface<T> {
+/// Ray marching of a voxelised object (Jeschke et al. 2007, sec. 4.2-4.4) on the paper's [`ShellSurface`].
+pub trait VoxelMarching<T: Real> {
     /// The nearest hit of `ray` with `t` in `(t_min, t_max)` by ray marching through the
     /// voxelised object (Jeschke et al. 2007 sec. 4.2-4.3 for volumetric content);
     /// `opts.samples_per_texel` counts per voxel. The hit's object triangle is the one that
     /// marked the hit voxel.
-    pub fn intersect_marching(
+    fn intersect_marching(
+        &self,
+        ray: &Ray<T>,
+        t_min: T,
+        t_max: T,
+        voxels: &VoxelObject,
+        opts: &MarchOptions,
+        stats: &mut TraversalStats,
+    ) -> Option<ShellHit<T>>;
+
+    /// [`VoxelMarching::intersect_marching`] with jumps by the voxels' distance map (sec. 4.4).
+    fn intersect_sphere_traced(
+        &self,
+        ray: &Ray<T>,
+        t_min: T,
+        t_max: T,
+        voxels: &VoxelObject,
+        opts: &MarchOptions,
+        stats: &mut TraversalStats,
+    ) -> Option<ShellHit<T>>;
+}
+
+impl<T: Real> VoxelMarching<T> for ShellSurface<T> {
+    fn intersect_marching(
         &self,
         ray: &Ray<T>,
         t_min: T,
@@ -294,8 +319,7 @@ impl<T: Real> ShellSurface<T> {
         self.march_voxels(ray, t_min, t_max, &medium, opts, stats)
     }
 
-    /// [`ShellSurface::intersect_marching`] with jumps by the voxels' distance map (sec. 4.4).
-    pub fn intersect_sphere_traced(
+    fn intersect_sphere_traced(
         &self,
         ray: &Ray<T>,
         t_min: T,
@@ -310,7 +334,22 @@ impl<T: Real> ShellSurface<T> {
         };
         self.march_voxels(ray, t_min, t_max, &medium, opts, stats)
     }
+}
 
+/// The steps of [`VoxelMarching`].
+pub(crate) trait VoxelParts<T: Real> {
+    fn march_voxels(
+        &self,
+        ray: &Ray<T>,
+        t_min: T,
+        t_max: T,
+        medium: &VoxelMedium<'_>,
+        opts: &MarchOptions,
+        stats: &mut TraversalStats,
+    ) -> Option<ShellHit<T>>;
+}
+
+impl<T: Real> VoxelParts<T> for ShellSurface<T> {
     fn march_voxels(
         &self,
         ray: &Ray<T>,
@@ -321,24 +360,23 @@ impl<T: Real> ShellSurface<T> {
         stats: &mut TraversalStats,
     ) -> Option<ShellHit<T>> {
         let voxels = medium.voxels;
-        self.prisms
-            .traverse(ray, t_min, t_max, |tri, prism, t_max| {
-                stats.prism_tests += 1;
-                let span = intersect_prism(prism, ray, t_min, t_max)?;
-                let (c, t) = march_segment(prism, ray, &span, opts, medium, stats)?;
-                if !(t > t_min && t < t_max) {
-                    return None;
-                }
-                let [x, y, z] = medium.voxel(prism, &c);
-                let res = voxels.res as i64;
-                let hit = ShellHit {
-                    hit: Hit::at(prism, t, c[0], c[1], c[2]),
-                    triangle: tri as u32,
-                    tile: [x.div_euclid(res) as i32, y.div_euclid(res) as i32],
-                    object_triangle: voxels.triangle_at(x, y, z)?,
-                };
-                Some((hit, t))
-            })
+        self.traverse_prisms(ray, t_min, t_max, |tri, prism, t_max| {
+            stats.prism_tests += 1;
+            let span = intersect_prism(prism, ray, t_min, t_max)?;
+            let (c, t) = march_segment(prism, ray, &span, opts, medium, stats)?;
+            if !(t > t_min && t < t_max) {
+                return None;
+            }
+            let [x, y, z] = medium.voxel(prism, &c);
+            let res = voxels.res as i64;
+            let hit = ShellHit {
+                hit: Hit::at(prism, t, c[0], c[1], c[2]),
+                triangle: tri as u32,
+                tile: [x.div_euclid(res) as i32, y.div_euclid(res) as i32],
+                object_triangle: voxels.triangle_at(x, y, z)?,
+            };
+            Some((hit, t))
+        })
     }
 }
 

@@ -1,0 +1,15 @@
+//! Counters of a traversal, kept by every walk (cheap enough to leave on).
+
+/// Counters of one traversal (for reports; cheap enough to keep on).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct TraversalStats {
+    /// Prisms whose exact test ran.
+    pub prism_tests: u32,
+    /// Texture-space box tests.
+    pub box_tests: u32,
+    /// Texels tested (each one or two microtriangles, or one flat rectangle).
+    pub texel_tests: u32,
+    /// Base triangles whose walk along the ray's curve outgrew its fixed stack and was
+    /// finished by box tests (slower, same answer).
+    pub fallbacks: u32,
+}
