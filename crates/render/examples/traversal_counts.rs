@@ -8,7 +8,7 @@
 use nlrt_accel::TraversalStats;
 use nlrt_poly::glam::Vec3;
 use nlrt_render::scenes::{Size, builtin};
-use nlrt_render::trace::Nonlinear;
+use nlrt_render::tracers::Nonlinear;
 use nlrt_shellmap::Ray;
 fn main() {
     let name = std::env::args().nth(1).unwrap_or("mountain".into());

@@ -15,7 +15,7 @@
 
 use crate::scenes::{self, Content, Scene, Size};
 use crate::tessellate::Tessellated;
-use crate::trace::Nonlinear;
+use crate::tracers::Nonlinear;
 use nlrt_accel::{DisplacedSurface, HeightField, TraversalStats};
 use nlrt_poly::glam::DVec3;
 use nlrt_shellmap::Ray;

@@ -12,7 +12,7 @@ use nlrt_poly::glam::DVec3;
 
 use crate::scenes::Scene;
 use crate::tessellate::Tessellated;
-use crate::trace::{TraceHit, Tracer};
+use crate::tracer::{TraceHit, Tracer};
 
 /// An Embree device and committed scene holding a scene's tessellation.
 pub struct EmbreeTessellated {

@@ -4,9 +4,10 @@
 //! every method, and the report (Markdown and images) in `nlrt-report/`.
 
 use clap::{Parser, Subcommand, ValueEnum};
+use nlrt_render::integrator::RenderOptions;
+use nlrt_render::method::Method;
 use nlrt_render::report::{self, ReportOptions};
 use nlrt_render::scenes::{self, SCENE_NAMES, Size};
-use nlrt_render::trace::{Method, RenderOptions};
 use nlrt_render::watertight;
 use nlrt_render::{edit, solvers};
 use std::path::PathBuf;
@@ -139,8 +140,7 @@ impl RenderArgs {
 enum Command {
     /// Render a built-in scene with nonlinear ray tracing to a PNG.
     Render {
-        /// A built-in scene (mountain, cylinder, fur, torus, scales, cornell) or a scene file
-        /// (`*.toml`, see the README).
+        #[arg(help = scene_help("A built-in scene"))]
         scene: String,
         /// Precision of the intersection (the pre-tessellated reference is always f64).
         #[arg(long, value_enum, default_value = "f32")]
@@ -161,7 +161,7 @@ enum Command {
     /// Speed, init time, memory and 1-thread vs all-threads scaling per scene and method (no
     /// images written).
     Bench {
-        /// Scenes (default: all built-in).
+        #[arg(help = scene_help("Scenes (default: every built-in one but the variants), each a built-in scene"))]
         scenes: Vec<String>,
         #[command(flatten)]
         args: RenderArgs,
@@ -224,7 +224,7 @@ enum Command {
     },
     /// Write a built-in scene as a scene file (TOML + OBJ + 16-bit PNG or object OBJ).
     Export {
-        /// Built-in scene name.
+        #[arg(help = format!("Built-in scene: {}", builtin_list()))]
         scene: String,
         /// Map sizes.
         #[arg(long, value_enum, default_value = "small")]
@@ -267,6 +267,24 @@ fn check_scenes(names: &[String]) -> Result<(), String> {
         }
     }
     Ok(())
+}
+
+/// The built-in scenes and variants as the help lists them (from the list the code builds,
+/// so the help cannot fall behind it).
+fn builtin_list() -> String {
+    format!(
+        "{}; variants {}",
+        SCENE_NAMES.join(", "),
+        scenes::VARIANT_NAMES.join(", ")
+    )
+}
+
+/// Help for a scene argument: `what` (built-in scenes listed) or a scene file.
+fn scene_help(what: &str) -> String {
+    format!(
+        "{what} ({}) or a scene file (`*.toml`, see the README)",
+        builtin_list()
+    )
 }
 
 /// A built-in scene by name, or a scene file (`*.toml`).
@@ -322,7 +340,7 @@ fn report_command(output: PathBuf, args: &RenderArgs, solver_samples: usize) -> 
             ));
             let path = output.join(format!("{name}-leaks-{}.png", r.method.slug()));
             if let Err(e) =
-                nlrt_render::trace::write_png(&path, 256, 256, &watertight::leak_image(&r))
+                nlrt_render::image::write_png(&path, 256, 256, &watertight::leak_image(&r))
             {
                 return fail("report", format!("cannot write {}: {e}", path.display()));
             }
@@ -421,7 +439,7 @@ fn main() -> ExitCode {
             };
             let runs = report::run_scene(&built, &opts);
             let run = &runs[0];
-            if let Err(e) = nlrt_render::trace::write_png(
+            if let Err(e) = nlrt_render::image::write_png(
                 &output,
                 run.frame.width,
                 run.frame.height,
@@ -606,7 +624,7 @@ fn main() -> ExitCode {
                 if let Some(dir) = &output {
                     let path = dir.join(format!("{scene}-leaks-{}.png", r.method.slug()));
                     if let Err(e) = std::fs::create_dir_all(dir).and_then(|()| {
-                        nlrt_render::trace::write_png(
+                        nlrt_render::image::write_png(
                             &path,
                             side,
                             side,

@@ -2,8 +2,11 @@
 //! rays), init time, memory, and error against the f64 pre-tessellated reference (hit/miss
 //! mismatches and depth error of the primary rays), with images.
 
+use crate::image::write_png;
+use crate::integrator::{Frame, RenderOptions, render};
+use crate::method::Method;
 use crate::scenes::{self, Scene, Size};
-use crate::trace::{Frame, Method, RenderOptions, Tracer, render, write_png};
+use crate::tracer::Tracer;
 use std::fmt::Write as _;
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};

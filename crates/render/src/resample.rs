@@ -5,7 +5,7 @@
 //! differs from the clipped pre-tessellation.
 
 use crate::scenes::{Content, Scene};
-use crate::trace::{TraceHit, Tracer, ray_in};
+use crate::tracer::{TraceHit, Tracer, ray_in};
 use nlrt_accel::HEIGHT_ONE;
 use nlrt_baselines::GeometryImage;
 use nlrt_poly::glam::{DVec2, DVec3};

@@ -23,8 +23,8 @@
 //! For shell mapping, `[shell]` with `object = "object.obj"` (vertices `(x, y, z)` read as
 //! `(u, v, h)` in `[0, 1]^3`), `height_scale` and `tiling` replaces `[displacement]`.
 
+use crate::material::Material;
 use crate::scenes::{Camera, Content, Scene};
-use crate::trace::Material;
 use nlrt_accel::{HeightField, Wrap};
 use nlrt_poly::glam::{DVec2, DVec3};
 use serde::Deserialize;

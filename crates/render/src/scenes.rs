@@ -2,7 +2,7 @@
 //! (nothing is downloaded). Each is a base mesh with normals and uvs, a height map, a height
 //! scale, a tiling and a camera.
 
-use crate::trace::Material;
+use crate::material::Material;
 use nlrt_accel::{BaseMesh, HeightField, Wrap};
 use nlrt_poly::glam::{DVec2, DVec3};
 use rayon::prelude::*;

@@ -19,8 +19,9 @@
 //! is not detected (a lower bound on leaks). `NLRT_SHOW_LEAKS=1` prints each leak. Displacement scenes only: a shell-mapped object
 //! need not cover the base.
 
+use crate::method::Method;
 use crate::scenes::{Content, Scene};
-use crate::trace::{Method, Nonlinear};
+use crate::tracers::Nonlinear;
 use nlrt_accel::{Aabb, Bvh4, SlabRay, TraversalStats, Wrap};
 use nlrt_baselines::{AffineTracing as _, MarchOptions, Marching as _, TetrahedralShells as _};
 use nlrt_oracle::crossing::ray_triangle;
@@ -350,7 +351,7 @@ fn measure_in<T: Real>(
         unreachable!("displacement scene")
     };
     let map = matches!(method, Method::DistanceMapF32 | Method::DistanceMapF64)
-        .then(|| crate::trace::distance_map_of(surface.field()));
+        .then(|| crate::tracers::distance_map_of(surface.field()));
     let criteria = criteria(scene);
     // Base and top-cap triangles exactly as the tracer's prisms have them.
     let mesh = surface.mesh();

@@ -1,10 +1,12 @@
 //! The renderer and the report on reduced scenes: methods agree where they must, and the
 //! CLI fails cleanly.
 
+use nlrt_render::integrator::{RenderOptions, render};
+use nlrt_render::method::Method;
 use nlrt_render::report::compare;
 use nlrt_render::scenes;
 use nlrt_render::tessellate::Tessellated;
-use nlrt_render::trace::{Method, Nonlinear, RenderOptions, render};
+use nlrt_render::tracers::Nonlinear;
 use std::process::Command;
 
 fn small() -> RenderOptions {
@@ -81,6 +83,24 @@ fn nlrt(args: &[&str]) -> std::process::Output {
         .args(args)
         .output()
         .expect("nlrt runs")
+}
+
+/// The help of every command that takes a scene lists exactly the built-in scenes and
+/// variants the code knows (the list is built from them, so a new scene cannot be missed).
+#[test]
+fn help_lists_every_built_in_scene() {
+    use nlrt_render::scenes::{SCENE_NAMES, VARIANT_NAMES};
+    for command in ["render", "bench", "export"] {
+        let out = nlrt(&[command, "--help"]);
+        assert!(out.status.success(), "{command} --help");
+        let help = String::from_utf8_lossy(&out.stdout);
+        for name in SCENE_NAMES.iter().chain(VARIANT_NAMES.iter()) {
+            assert!(
+                help.contains(name),
+                "{command} --help lacks {name}:\n{help}"
+            );
+        }
+    }
 }
 
 #[test]
@@ -404,7 +424,7 @@ fn curved_shell_mapping_agrees_with_its_own_reference() {
 #[test]
 fn cone_tracing_silhouette_correction_cuts_the_mismatches_on_the_cylinder() {
     use nlrt_baselines::Rectification;
-    use nlrt_render::trace::ConeTracer;
+    use nlrt_render::tracers::ConeTracer;
     let scene = scenes::cylinder(128);
     let opts = RenderOptions {
         width: 160,

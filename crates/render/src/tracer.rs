@@ -1,0 +1,60 @@
+//! The interface every method is traced through: a ray in f64 in, the nearest hit out
+//! ([`Tracer`]), with the conversions of a renderer ray into a method's precision.
+
+use nlrt_poly::glam::DVec3;
+use nlrt_poly::{Real, Vector3};
+use nlrt_shellmap::Ray;
+
+/// A hit as the renderer sees it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TraceHit {
+    /// Distance along the ray.
+    pub t: f64,
+    /// Unit normal facing against the ray.
+    pub normal: DVec3,
+    /// Base triangle hit (the hit-id AOV).
+    pub id: u32,
+}
+
+impl TraceHit {
+    /// A hit found in precision `T`: distance, unit normal facing against the ray, base
+    /// triangle.
+    #[must_use]
+    pub(crate) fn from_precision<T: Real>(t: T, normal: T::Vec3, id: u32) -> Self {
+        Self {
+            t: t.to_f64(),
+            normal: to_dvec3::<T>(normal),
+            id,
+        }
+    }
+}
+
+/// A renderer ray (f64) in precision `T` with its distance range (an infinite `t_max` stays
+/// infinite); `None` for a zero or non-finite direction.
+pub(crate) fn ray_in<T: Real>(
+    origin: DVec3,
+    dir: DVec3,
+    t_min: f64,
+    t_max: f64,
+) -> Option<(Ray<T>, T, T)> {
+    let v = |a: DVec3| T::Vec3::new(T::from_f64(a.x), T::from_f64(a.y), T::from_f64(a.z));
+    let t_max = if t_max.is_finite() {
+        T::from_f64(t_max)
+    } else {
+        T::INFINITY
+    };
+    Some((Ray::new(v(origin), v(dir))?, T::from_f64(t_min), t_max))
+}
+
+/// A vector of precision `T` in f64.
+pub(crate) fn to_dvec3<T: Real>(v: T::Vec3) -> DVec3 {
+    DVec3::new(v.x().to_f64(), v.y().to_f64(), v.z().to_f64())
+}
+
+/// Intersection of a ray with the scene.
+pub trait Tracer: Sync {
+    /// Nearest hit with distance in `(t_min, t_max]`.
+    fn intersect(&self, origin: DVec3, dir: DVec3, t_min: f64, t_max: f64) -> Option<TraceHit>;
+    /// Bytes of acceleration data.
+    fn memory_bytes(&self) -> usize;
+}
