@@ -54,3 +54,8 @@ pub use mesh::{BaseMesh, MeshError, prism_bounds};
 pub use shell::{ShellError, ShellHit, ShellObject, ShellSurface};
 pub use stats::TraversalStats;
 pub use tlas::{MAX_TEXEL_COORDINATE, RootNodes};
+
+/// The README's examples, run by `cargo test --doc`.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+struct ReadmeDoctests;

@@ -72,3 +72,8 @@ pub use march::{MarchOptions, Marching};
 pub use projective::ProjectiveSurface;
 pub use tetra::TetrahedralShells;
 pub use volume::{VoxelMarching, VoxelObject};
+
+/// The README's examples, run by `cargo test --doc`.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+struct ReadmeDoctests;

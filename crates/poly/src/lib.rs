@@ -52,3 +52,8 @@ pub use quadratic::{discriminant, quadratic_range, solve_quadratic, solve_quadra
 pub use real::Real;
 pub use roots::Roots;
 pub use vector::{Vector2, Vector3, difference_of_products};
+
+/// The README's examples, run by `cargo test --doc`.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+struct ReadmeDoctests;

@@ -45,3 +45,8 @@ pub use microtriangle::{
 pub use prism::{Canonical, Prism};
 pub use prism_hit::{PrismSpan, intersect_prism};
 pub use ray::{BaseEdges, NonlinearRay, Ray};
+
+/// The README's examples, run by `cargo test --doc`.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+struct ReadmeDoctests;
