@@ -1,7 +1,9 @@
-//! Self-contained SVG scatter plots with logarithmic axes, for the report's speed-against-error
-//! figure (no plotting dependency: a few dozen points need a few dozen elements).
+//! SVG scatter plots with logarithmic axes for the report's speed-against-error figure, drawn
+//! by `plotters` (SVG backend): panels side by side, one colour per series, a label beside
+//! each point, the legend below.
 
-use std::fmt::Write;
+use plotters::coord::Shift;
+use plotters::prelude::*;
 
 /// One point: position and a short label drawn beside it.
 #[derive(Clone, Debug)]
@@ -41,20 +43,13 @@ pub struct Panel {
     pub series: Vec<Series>,
 }
 
-const W: f64 = 520.0;
-const H: f64 = 380.0;
-const LEFT: f64 = 70.0;
-const RIGHT: f64 = 20.0;
-const TOP: f64 = 40.0;
-const BOTTOM: f64 = 50.0;
+/// Width and height of one panel, in pixels.
+const PANEL: (u32, u32) = (520, 380);
+/// Height of one legend row (three entries a row).
+const LEGEND_ROW: u32 = 22;
 
-fn escape(s: &str) -> String {
-    s.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
-}
-
-/// Decades `[lo, hi]` covering the finite positive values, at least one wide.
+/// Decades `[lo, hi]` covering the finite positive values (those at or below `floor` counted
+/// as `floor`), at least one wide.
 fn decades(values: impl Iterator<Item = f64>, floor: f64) -> (i32, i32) {
     let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
     for v in values {
@@ -71,127 +66,141 @@ fn decades(values: impl Iterator<Item = f64>, floor: f64) -> (i32, i32) {
     (a, b.max(a + 1))
 }
 
-/// Panels side by side as one SVG document.
+/// A CSS colour `#rrggbb` as plotters' colour (black for anything else).
+fn rgb(css: &str) -> RGBColor {
+    let hex = css.strip_prefix('#').unwrap_or("");
+    let byte = |i: usize| {
+        hex.get(i..i + 2)
+            .and_then(|h| u8::from_str_radix(h, 16).ok())
+            .unwrap_or(0)
+    };
+    if hex.len() == 6 {
+        RGBColor(byte(0), byte(2), byte(4))
+    } else {
+        match css {
+            "red" => RED,
+            "blue" => BLUE,
+            "green" => GREEN,
+            _ => BLACK,
+        }
+    }
+}
+
+/// Panels side by side as one SVG document (the legend, from the first panel's series,
+/// below them).
 #[must_use]
 pub fn svg(panels: &[Panel]) -> String {
-    let total_w = W * panels.len().max(1) as f64;
-    let legend: Vec<(String, &str)> = panels
+    let legend: Vec<(&str, &str)> = panels
         .first()
-        .map(|p| p.series.iter().map(|s| (s.name.clone(), s.color)).collect())
+        .map(|p| {
+            p.series
+                .iter()
+                .map(|s| (s.name.as_str(), s.color))
+                .collect()
+        })
         .unwrap_or_default();
-    let legend_h = 22.0 * legend.len().div_ceil(3) as f64 + 10.0;
+    let legend_h = LEGEND_ROW * legend.len().div_ceil(3) as u32 + 10;
+    let size = (PANEL.0 * panels.len().max(1) as u32, PANEL.1 + legend_h);
     let mut out = String::new();
-    let _ = writeln!(
-        out,
-        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{total_w}" height="{}" font-family="sans-serif" font-size="11">"#,
-        H + legend_h
-    );
-    let _ = writeln!(out, r#"<rect width="100%" height="100%" fill="white"/>"#);
-    for (i, panel) in panels.iter().enumerate() {
-        panel_svg(&mut out, panel, W * i as f64);
-    }
-    for (k, (name, color)) in legend.iter().enumerate() {
-        let (x, y) = (
-            LEFT + 160.0 * (k % 3) as f64,
-            H + 16.0 + 22.0 * (k / 3) as f64,
-        );
-        let _ = writeln!(
-            out,
-            r#"<circle cx="{x}" cy="{y}" r="5" fill="{color}"/><text x="{}" y="{}">{}</text>"#,
-            x + 10.0,
-            y + 4.0,
-            escape(name)
+    // Drawing into a String cannot fail for I/O; an error would mean a plotters bug, and the
+    // report then carries a note instead of the figure.
+    if let Err(e) = draw(&mut out, size, panels, &legend) {
+        return format!(
+            "<svg xmlns=\"http://www.w3.org/2000/svg\"><text y=\"20\">plot failed: {e}</text></svg>\n"
         );
     }
-    out.push_str("</svg>\n");
     out
 }
 
-fn panel_svg(out: &mut String, panel: &Panel, x0: f64) {
+fn draw(
+    out: &mut String,
+    size: (u32, u32),
+    panels: &[Panel],
+    legend: &[(&str, &str)],
+) -> Result<(), Box<dyn std::error::Error>> {
+    let root = SVGBackend::with_string(out, size).into_drawing_area();
+    root.fill(&WHITE)?;
+    let (upper, lower) = root.split_vertically(PANEL.1);
+    let areas = upper.split_evenly((1, panels.len().max(1)));
+    for (panel, area) in panels.iter().zip(&areas) {
+        draw_panel(panel, area)?;
+    }
+    for (k, (name, color)) in legend.iter().enumerate() {
+        let (x, y) = (
+            70 + 160 * (k % 3) as i32,
+            16 + LEGEND_ROW as i32 * (k / 3) as i32,
+        );
+        lower.draw(&Circle::new((x, y), 5, rgb(color).filled()))?;
+        lower.draw(&Text::new(
+            name.to_string(),
+            (x + 10, y - 6),
+            ("sans-serif", 11),
+        ))?;
+    }
+    root.present()?;
+    Ok(())
+}
+
+fn draw_panel(
+    panel: &Panel,
+    area: &DrawingArea<SVGBackend<'_>, Shift>,
+) -> Result<(), Box<dyn std::error::Error>> {
     let points = || panel.series.iter().flat_map(|s| s.points.iter());
     let (xa, xb) = decades(points().map(|p| p.x), 0.0);
     let (ya, yb) = decades(points().map(|p| p.y), panel.y_floor);
-    let (plot_w, plot_h) = (W - LEFT - RIGHT, H - TOP - BOTTOM);
-    let sx = |x: f64| x0 + LEFT + (x.log10() - f64::from(xa)) / f64::from(xb - xa) * plot_w;
-    let sy = |y: f64| {
-        let y = y.max(panel.y_floor);
-        TOP + plot_h - (y.log10() - f64::from(ya)) / f64::from(yb - ya) * plot_h
-    };
-    let _ = writeln!(
-        out,
-        r#"<text x="{}" y="22" font-size="13" font-weight="bold">{}</text>"#,
-        x0 + LEFT,
-        escape(&panel.title)
+    let (x_range, y_range) = (
+        10f64.powi(xa)..10f64.powi(xb),
+        10f64.powi(ya)..10f64.powi(yb),
     );
-    let _ = writeln!(
-        out,
-        r##"<rect x="{}" y="{TOP}" width="{plot_w}" height="{plot_h}" fill="none" stroke="#444"/>"##,
-        x0 + LEFT
-    );
-    for d in xa..=xb {
-        let x = sx(10f64.powi(d));
-        let _ = writeln!(
-            out,
-            r##"<line x1="{x}" y1="{TOP}" x2="{x}" y2="{}" stroke="#ddd"/><text x="{x}" y="{}" text-anchor="middle">1e{d}</text>"##,
-            TOP + plot_h,
-            TOP + plot_h + 15.0
-        );
-    }
-    for d in ya..=yb {
-        let y = sy(10f64.powi(d));
-        let label = if f64::from(d) <= panel.y_floor.log10() {
-            format!("&#8804;1e{d}")
-        } else {
-            format!("1e{d}")
-        };
-        let _ = writeln!(
-            out,
-            r##"<line x1="{}" y1="{y}" x2="{}" y2="{y}" stroke="#ddd"/><text x="{}" y="{}" text-anchor="end">{label}</text>"##,
-            x0 + LEFT,
-            x0 + LEFT + plot_w,
-            x0 + LEFT - 4.0,
-            y + 4.0
-        );
-    }
-    let _ = writeln!(
-        out,
-        r#"<text x="{}" y="{}" text-anchor="middle">{}</text>"#,
-        x0 + LEFT + plot_w / 2.0,
-        H - 12.0,
-        escape(&panel.x_label)
-    );
-    let _ = writeln!(
-        out,
-        r#"<text transform="translate({},{}) rotate(-90)" text-anchor="middle">{}</text>"#,
-        x0 + 16.0,
-        TOP + plot_h / 2.0,
-        escape(&panel.y_label)
-    );
+    let mut chart = ChartBuilder::on(area)
+        .caption(&panel.title, ("sans-serif", 13))
+        .margin(16)
+        .x_label_area_size(40)
+        .y_label_area_size(60)
+        .build_cartesian_2d(x_range.log_scale(), y_range.log_scale())?;
+    let floor = panel.y_floor;
+    chart
+        .configure_mesh()
+        .x_desc(&panel.x_label)
+        // The bottom line also holds the exact zeros, which a log axis cannot show.
+        .y_desc(format!("{} (<= {floor:.0e} at the bottom)", panel.y_label))
+        .x_label_formatter(&|v| format!("{v:.0e}"))
+        .y_label_formatter(&|v| format!("{v:.0e}"))
+        .draw()?;
     for s in &panel.series {
-        for p in &s.points {
-            if !(p.x > 0.0 && p.x.is_finite() && !p.y.is_nan()) {
-                continue;
-            }
-            let (x, y) = (sx(p.x), sy(p.y));
-            let _ = writeln!(
-                out,
-                r#"<circle cx="{x:.1}" cy="{y:.1}" r="5" fill="{}" fill-opacity="0.8"><title>{}: {} ({:.3e}, {:.3e})</title></circle><text x="{:.1}" y="{:.1}" font-size="9">{}</text>"#,
-                s.color,
-                escape(&s.name),
-                escape(&p.label),
-                p.x,
-                p.y,
-                x + 7.0,
-                y - 5.0,
-                escape(&p.label)
-            );
-        }
+        let color = rgb(s.color);
+        let shown = s
+            .points
+            .iter()
+            .filter(|p| p.x > 0.0 && p.x.is_finite() && !p.y.is_nan());
+        chart.draw_series(shown.map(|p| {
+            EmptyElement::at((p.x, p.y.max(floor)))
+                + Circle::new((0, 0), 5, color.mix(0.8).filled())
+                + Text::new(p.label.clone(), (7, -12), ("sans-serif", 9))
+        }))?;
     }
+    Ok(())
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The centres of the circles drawn in `fill` (plotters writes `cx`, `cy` and `fill`
+    /// attributes on one element).
+    fn circles(doc: &str, fill: &str) -> Vec<(f64, f64)> {
+        doc.split("<circle")
+            .skip(1)
+            .filter(|c| c.to_ascii_uppercase().contains(&format!("FILL=\"{fill}\"")))
+            .map(|c| {
+                let num = |key: &str| {
+                    let s = &c[c.find(key).unwrap() + key.len()..];
+                    s[..s.find('"').unwrap()].parse::<f64>().unwrap()
+                };
+                (num("cx=\""), num("cy=\""))
+            })
+            .collect()
+    }
 
     #[test]
     fn points_land_inside_the_plot_and_zeros_on_the_floor() {
@@ -202,7 +211,7 @@ mod tests {
             y_floor: 1e-9,
             series: vec![Series {
                 name: "a<b".into(),
-                color: "red",
+                color: "#d62728",
                 points: vec![
                     Point {
                         x: 0.3,
@@ -214,29 +223,42 @@ mod tests {
                         y: 1e-3,
                         label: "p".into(),
                     },
+                    Point {
+                        x: f64::NAN,
+                        y: 1.0,
+                        label: "dropped".into(),
+                    },
                 ],
             }],
         };
         let doc = svg(&[panel]);
-        assert!(doc.starts_with("<svg") && doc.trim_end().ends_with("</svg>"));
+        assert!(
+            doc.starts_with("<svg") && doc.trim_end().ends_with("</svg>"),
+            "{doc}"
+        );
         assert!(doc.contains("a&lt;b") && !doc.contains("a<b"));
-        let circles: Vec<(f64, f64)> = doc
-            .lines()
-            .filter(|l| l.starts_with("<circle cx") && l.contains("<title>"))
-            .map(|l| {
-                let num = |key: &str| {
-                    let s = &l[l.find(key).unwrap() + key.len()..];
-                    s[..s.find('"').unwrap()].parse::<f64>().unwrap()
-                };
-                (num("cx=\""), num("cy=\""))
-            })
-            .collect();
-        assert_eq!(circles.len(), 2);
-        for (x, y) in &circles {
-            assert!((LEFT..=W - RIGHT).contains(x) && (TOP..=H - BOTTOM).contains(y));
+        assert!(!doc.contains("dropped") && !doc.contains("plot failed"));
+        // Two points and one legend entry, all inside the figure.
+        let drawn = circles(&doc, "#D62728");
+        assert_eq!(drawn.len(), 3, "{doc}");
+        let (w, h) = (f64::from(PANEL.0), f64::from(PANEL.1));
+        for (x, y) in &drawn[..2] {
+            assert!((0.0..w).contains(x) && (0.0..h).contains(y), "{x}, {y}");
         }
-        // The zero sits on the floor: the bottom edge of the plot (floor = lowest decade).
-        assert!((circles[0].1 - (H - BOTTOM)).abs() < 0.1);
-        assert!(circles[1].1 < circles[0].1);
+        // The zero sits on the floor, the lowest decade: below (larger y than) the other
+        // point, and left of it (0.3 < 2).
+        assert!(
+            drawn[0].1 > drawn[1].1 && drawn[0].0 < drawn[1].0,
+            "{drawn:?}"
+        );
+    }
+
+    #[test]
+    fn colours_parse_and_decades_cover_the_values() {
+        assert_eq!(rgb("#d62728"), RGBColor(0xd6, 0x27, 0x28));
+        assert_eq!(rgb("nonsense"), BLACK);
+        assert_eq!(decades([0.05, 3.0].into_iter(), 0.0), (-2, 1));
+        assert_eq!(decades([0.0, 1e-3].into_iter(), 1e-6), (-6, -3));
+        assert_eq!(decades(std::iter::empty(), 1.0), (0, 1));
     }
 }
