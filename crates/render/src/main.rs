@@ -429,6 +429,13 @@ fn main() -> ExitCode {
             if let Some(why) = method.unsupported_reason(&built) {
                 return fail("render", format!("{method} cannot render {scene}: {why}"));
             }
+            // Scene files are checked in f64 when loaded; a value finite in f64 may not be
+            // in f32.
+            if method.slug().ends_with("-f32") {
+                if let Err(e) = built.check_precision::<f32>() {
+                    return fail("render", format!("{scene}: {e}"));
+                }
+            }
             let opts = ReportOptions {
                 scenes: vec![scene.clone()],
                 size: args.scene_size.into(),
@@ -563,42 +570,55 @@ fn main() -> ExitCode {
                 return fail("watertight", "unknown scene");
             };
             let side = ((rays as f64).sqrt().ceil() as usize).max(1);
-            let methods = watertight::METHODS.into_iter().filter(|m| {
-                let precision_ok = match precision {
-                    Some(Precision::F32) => m.name().ends_with("f32"),
-                    Some(Precision::F64) => m.name().ends_with("f64"),
-                    None => true,
-                };
-                let method_ok = match method {
-                    Some(MethodKind::Nonlinear) => {
-                        matches!(m, Method::NonlinearF32 | Method::NonlinearF64)
-                    }
-                    Some(MethodKind::TessellationFree) => {
-                        matches!(m, Method::AffineF32 | Method::AffineF64)
-                    }
-                    Some(MethodKind::Marching) => {
-                        matches!(m, Method::MarchingF32 | Method::MarchingF64)
-                    }
-                    Some(MethodKind::DistanceMap) => {
-                        matches!(m, Method::DistanceMapF32 | Method::DistanceMapF64)
-                    }
-                    Some(MethodKind::Tetrahedra) => {
-                        matches!(m, Method::TetrahedraF32 | Method::TetrahedraF64)
-                    }
-                    Some(
-                        MethodKind::Tessellated
-                        | MethodKind::Embree
-                        | MethodKind::TessellatedCurved
-                        | MethodKind::GeometryImage
-                        | MethodKind::Projective
-                        | MethodKind::Curved
-                        | MethodKind::ConeRay
-                        | MethodKind::ConeCone,
-                    ) => false,
-                    None => true,
-                };
-                precision_ok && method_ok
-            });
+            let mut methods = watertight::METHODS
+                .into_iter()
+                .filter(|m| {
+                    let precision_ok = match precision {
+                        Some(Precision::F32) => m.name().ends_with("f32"),
+                        Some(Precision::F64) => m.name().ends_with("f64"),
+                        None => true,
+                    };
+                    let method_ok = match method {
+                        Some(MethodKind::Nonlinear) => {
+                            matches!(m, Method::NonlinearF32 | Method::NonlinearF64)
+                        }
+                        Some(MethodKind::TessellationFree) => {
+                            matches!(m, Method::AffineF32 | Method::AffineF64)
+                        }
+                        Some(MethodKind::Marching) => {
+                            matches!(m, Method::MarchingF32 | Method::MarchingF64)
+                        }
+                        Some(MethodKind::DistanceMap) => {
+                            matches!(m, Method::DistanceMapF32 | Method::DistanceMapF64)
+                        }
+                        Some(MethodKind::Tetrahedra) => {
+                            matches!(m, Method::TetrahedraF32 | Method::TetrahedraF64)
+                        }
+                        Some(
+                            MethodKind::Tessellated
+                            | MethodKind::Embree
+                            | MethodKind::TessellatedCurved
+                            | MethodKind::GeometryImage
+                            | MethodKind::Projective
+                            | MethodKind::Curved
+                            | MethodKind::ConeRay
+                            | MethodKind::ConeCone,
+                        ) => false,
+                        None => true,
+                    };
+                    precision_ok && method_ok
+                })
+                .peekable();
+            if methods.peek().is_none() {
+                let judged: Vec<&str> = watertight::METHODS.iter().map(|m| m.slug()).collect();
+                return fail(
+                    "watertight",
+                    format!(
+                        "no method to judge: watertightness is measured for {} (the references are what it judges against; the other methods have no per-texel surface to decide leaks on)",
+                        judged.join(", ")
+                    ),
+                );
+            }
             println!(
                 "| scene | method | rays | decided | leaks | rate | 95% interval | hit distance vs oracle: median / p99 / max rel. error (hits compared, unverified) | seconds |"
             );

@@ -170,13 +170,19 @@ pub fn load(path: &Path) -> Result<Scene, String> {
     };
     let c = &file.camera;
     let finite = |v: [f64; 3]| v.iter().all(|x| x.is_finite());
-    if !(finite(c.eye)
-        && finite(c.target)
-        && finite(c.sun)
-        && DVec3::from(c.eye) != DVec3::from(c.target))
-    {
+    if !(finite(c.eye) && finite(c.target) && finite(c.sun)) {
         return Err(format!(
-            "{}: camera eye, target and sun must be finite, eye != target",
+            "{}: camera eye, target and sun must be finite numbers",
+            path.display()
+        ));
+    }
+    // The view direction must itself be finite and normalisable: eye and target far apart
+    // at opposite ends of f64's range overflow, and targets a subnormal distance from the
+    // eye underflow to a zero direction; either would make every camera ray NaN.
+    let view = DVec3::from(c.target) - DVec3::from(c.eye);
+    if !(view.is_finite() && view.normalize_or_zero() != DVec3::ZERO) {
+        return Err(format!(
+            "{}: camera target - eye = {view} is not a usable view direction (it must be finite and non-zero, with a length that neither overflows nor underflows)",
             path.display()
         ));
     }
@@ -185,11 +191,18 @@ pub fn load(path: &Path) -> Result<Scene, String> {
         c.fov_degrees,
         c.fov_degrees > 0.0 && c.fov_degrees < 180.0,
     )?;
-    let sun = DVec3::from(c.sun).normalize_or_zero();
-    if sun == DVec3::ZERO {
-        return Err(format!("{}: sun direction is zero", path.display()));
+    // Scaled by its largest component first, so a direction like [1e300, 1e300, 1e300],
+    // whose length overflows, still normalises.
+    let sun = DVec3::from(c.sun);
+    let largest = sun.abs().max_element();
+    if largest == 0.0 {
+        return Err(format!(
+            "{}: sun direction {sun} is zero: it has no direction",
+            path.display()
+        ));
     }
-    Ok(Scene {
+    let sun = (sun / largest).normalize();
+    let scene = Scene {
         name: "file",
         positions,
         normals,
@@ -208,7 +221,13 @@ pub fn load(path: &Path) -> Result<Scene, String> {
             MaterialName::Diffuse => Material::Diffuse,
             MaterialName::Glossy => Material::GLOSSY,
         },
-    })
+    };
+    // Mesh values, height scale and tiling as the tracers will see them in f64 (f32 is
+    // checked when an f32 method is asked for).
+    scene
+        .check_precision::<f64>()
+        .map_err(|e| format!("{}: {e}", path.display()))?;
+    Ok(scene)
 }
 
 type ObjData = (Vec<DVec3>, Vec<DVec3>, Vec<DVec2>, Vec<[u32; 3]>);
@@ -256,11 +275,18 @@ fn load_obj(path: &Path, base: bool) -> Result<ObjData, String> {
                 ));
             }
             if mesh.normals.len() == 3 * count {
-                n.push(DVec3::new(
+                let normal = DVec3::new(
                     f64::from(mesh.normals[3 * i]),
                     f64::from(mesh.normals[3 * i + 1]),
                     f64::from(mesh.normals[3 * i + 2]),
-                ));
+                );
+                if !normal.is_finite() {
+                    return Err(format!(
+                        "{}: vertex normal {normal} is not finite",
+                        path.display()
+                    ));
+                }
+                n.push(normal);
             }
         }
         for tri in mesh.indices.chunks_exact(3) {
@@ -304,6 +330,22 @@ fn load_obj(path: &Path, base: bool) -> Result<ObjData, String> {
     Ok((p, n, uv, t))
 }
 
+/// The largest height-map side a scene file may have: 16384^2 16-bit samples are 512 MiB
+/// (and the decoder's buffer as much again, or 1 GiB for a 32-bit EXR channel), four times
+/// the paper's largest map side (4096) and within this project's 24 GiB machines. Checked
+/// from the file's header, before anything is allocated.
+pub const MAX_MAP_SIDE: usize = 16_384;
+
+/// Whether a `w x h` map fits [`MAX_MAP_SIDE`], with the message that says why not.
+fn check_map_size(w: usize, h: usize) -> Result<(), String> {
+    if w > MAX_MAP_SIDE || h > MAX_MAP_SIDE {
+        return Err(format!(
+            "height map is {w} x {h}; the largest side a scene file may use is {MAX_MAP_SIDE}"
+        ));
+    }
+    Ok(())
+}
+
 /// A grayscale PNG (8 or 16 bits), or an OpenEXR file (by its extension), as a height field.
 fn load_height_map(path: &Path) -> Result<HeightField, String> {
     let err = |m: String| format!("{}: {m}", path.display());
@@ -319,6 +361,8 @@ fn load_height_map(path: &Path) -> Result<HeightField, String> {
     let mut reader = decoder
         .read_info()
         .map_err(|e| err(format!("not a readable PNG: {e}")))?;
+    let header = reader.info();
+    check_map_size(header.width as usize, header.height as usize).map_err(err)?;
     let mut buf = vec![
         0;
         reader
@@ -365,6 +409,13 @@ fn load_height_map(path: &Path) -> Result<HeightField, String> {
 fn load_exr_height_map(path: &Path) -> Result<HeightField, String> {
     use exr::prelude::*;
     let err = |m: String| format!("{}: {m}", path.display());
+    // The header first: a small file may claim any size, and reading it would allocate that.
+    let meta = exr::meta::MetaData::read_from_file(path, false)
+        .map_err(|e| err(format!("not a readable OpenEXR file: {e}")))?;
+    for header in &meta.headers {
+        let size = header.layer_size;
+        check_map_size(size.width(), size.height()).map_err(err)?;
+    }
     let image = read()
         .no_deep_data()
         .largest_resolution_level()

@@ -3,7 +3,7 @@
 //! scale, a tiling and a camera.
 
 use crate::material::Material;
-use nlrt_accel::{BaseMesh, HeightField, Wrap};
+use nlrt_accel::{BaseMesh, DisplacedSurface, HeightField, ShellObject, ShellSurface, Wrap};
 use nlrt_poly::glam::{DVec2, DVec3};
 use rayon::prelude::*;
 use std::f64::consts::TAU;
@@ -364,12 +364,59 @@ pub fn fur(side: usize) -> Scene {
 }
 
 impl Scene {
-    /// The base mesh in precision `T`.
+    /// Why this scene cannot be set up for nonlinear tracing (and every method built on the
+    /// same prisms) in precision `T`, or `Ok`: a mesh value, the height scale or the tiling
+    /// that is finite in f64 but not in `T`, or texture coordinates that, times the tiling
+    /// and the map's side, reach beyond [`nlrt_accel::MAX_TEXEL_COORDINATE`] texels. Scene
+    /// files are checked in f64 when loaded and in f32 before an f32 method runs.
     ///
-    /// # Panics
-    /// Never for the built-in scenes (their meshes are valid by construction).
-    #[must_use]
-    pub fn mesh<T: nlrt_poly::Real>(&self) -> BaseMesh<T> {
+    /// # Errors
+    /// The message names the value and the precision.
+    pub fn check_precision<T: nlrt_poly::Real>(&self) -> Result<(), String> {
+        use nlrt_poly::Vector3;
+        let precision = if core::mem::size_of::<T>() == 4 {
+            "f32"
+        } else {
+            "f64"
+        };
+        let in_precision = |what: &str, v: f64| {
+            let t = T::from_f64(v);
+            if v.is_finite() && !t.is_finite() {
+                Err(format!(
+                    "{what} = {v:e} is finite but not representable in {precision} (use --precision f64)"
+                ))
+            } else {
+                Ok(t)
+            }
+        };
+        let scale = in_precision("height_scale", self.height_scale)?;
+        let tiling = in_precision("tiling", self.tiling)?;
+        let mesh = self
+            .try_mesh::<T>()
+            .map_err(|e| format!("base mesh in {precision}: {e}"))?;
+        let limit = "texture coordinates x tiling x map side must stay within 2^22 texels";
+        match &self.content {
+            Content::Displacement(field) => {
+                DisplacedSurface::new(mesh, field.clone(), scale, tiling)
+                    .map_err(|e| format!("in {precision}: {e} ({limit})"))?;
+            }
+            Content::Shell(object) => {
+                let v =
+                    |p: &DVec3| T::Vec3::new(T::from_f64(p.x), T::from_f64(p.y), T::from_f64(p.z));
+                let object = ShellObject::new(object.iter().map(|t| t.map(|p| v(&p))).collect())
+                    .map_err(|e| format!("object in {precision}: {e}"))?;
+                ShellSurface::new(mesh, object, scale, tiling)
+                    .map_err(|e| format!("in {precision}: {e} (texture coordinates x tiling must stay within 2^22 tiles)"))?;
+            }
+        }
+        Ok(())
+    }
+
+    /// The base mesh in precision `T`, or why it is invalid there.
+    ///
+    /// # Errors
+    /// A non-finite value (in `T`) or a bad index.
+    pub fn try_mesh<T: nlrt_poly::Real>(&self) -> Result<BaseMesh<T>, nlrt_accel::MeshError> {
         use nlrt_poly::{Vector2, Vector3};
         let v3 = |v: &DVec3| T::Vec3::new(T::from_f64(v.x), T::from_f64(v.y), T::from_f64(v.z));
         let v2 = |v: &DVec2| T::Vec2::new(T::from_f64(v.x), T::from_f64(v.y));
@@ -379,7 +426,17 @@ impl Scene {
             self.uvs.iter().map(v2).collect(),
             self.triangles.clone(),
         )
-        .expect("built-in meshes are valid")
+    }
+
+    /// The base mesh in precision `T`.
+    ///
+    /// # Panics
+    /// When [`Scene::check_precision`] fails for `T`: never for the built-in scenes (valid by
+    /// construction), and never for a loaded scene file after the command's check.
+    #[must_use]
+    pub fn mesh<T: nlrt_poly::Real>(&self) -> BaseMesh<T> {
+        self.try_mesh()
+            .expect("scenes are checked by Scene::check_precision before they are built")
     }
 }
 

@@ -465,3 +465,23 @@ fn embree_traces_the_reference_triangles() {
         assert!(e.depth_max < 1e-5, "{}: {e:?}", scene.name);
     }
 }
+
+/// A method watertightness cannot judge is an exit-2 message saying which it judges, not an
+/// empty table.
+#[test]
+fn watertight_with_an_unjudged_method_says_why() {
+    let out = nlrt(&[
+        "watertight",
+        "torus",
+        "--method",
+        "geometry-image",
+        "--rays",
+        "16",
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("no method to judge") && err.contains("nonlinear-f32"),
+        "{err}"
+    );
+}

@@ -376,3 +376,156 @@ fn aovs_are_written_as_exr() {
     // The mountain fills about a third of this view, the sky the rest.
     assert!(hits > w * h / 5 && hits < w * h, "{hits}");
 }
+
+/// Renders the scratch scene with extra arguments; the exit code and stderr.
+fn render_with(dir: &Path, extra: &[&str]) -> (Option<i32>, String) {
+    let out_png = dir.join("out.png");
+    let mut args = vec![
+        "render",
+        dir.join("bumps.toml").to_str().unwrap(),
+        "--size",
+        "8x6",
+        "-o",
+        out_png.to_str().unwrap(),
+    ]
+    .into_iter()
+    .map(str::to_owned)
+    .collect::<Vec<_>>();
+    args.extend(extra.iter().map(|s| s.to_string()));
+    let refs: Vec<&str> = args.iter().map(String::as_str).collect();
+    let out = nlrt(&refs);
+    (
+        out.status.code(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+/// Texture coordinates the tracers cannot use (NaN; beyond 2^22 texels once tiled and scaled
+/// by the map's side), whether from the OBJ or from the tiling, are one message naming the
+/// scene file and the limit, not a panic.
+#[test]
+fn unusable_texture_coordinates_and_tilings_are_rejected() {
+    let dir = scratch("uv-nan");
+    edit(&dir, "quad.obj", "vt 1 0\n", "vt nan 0\n");
+    expect_error(&dir, &["bumps.toml", "NaN or infinite"]);
+    let dir = scratch("uv-huge");
+    edit(&dir, "quad.obj", "vt 1 0\n", "vt 3e38 0\n");
+    expect_error(&dir, &["bumps.toml", "2^22 texels"]);
+    let dir = scratch("tiling-huge");
+    edit(&dir, "bumps.toml", "tiling = 2.0", "tiling = 1e6");
+    expect_error(&dir, &["bumps.toml", "tiling", "2^22 texels"]);
+}
+
+/// A height scale finite in f64 but not in f32 is an error naming the value and the
+/// precision when f32 is asked for, and renders in f64.
+#[test]
+fn a_height_scale_beyond_f32_is_an_error_in_f32_only() {
+    for value in ["1e39", "1e300"] {
+        let dir = scratch(&format!("scale-{value}"));
+        edit(
+            &dir,
+            "bumps.toml",
+            "height_scale = 0.2",
+            &format!("height_scale = {value}"),
+        );
+        let (code, err) = render_with(&dir, &["--precision", "f32"]);
+        assert_eq!(code, Some(2), "{err}");
+        assert!(err.contains("height_scale") && err.contains("f32"), "{err}");
+        assert!(!err.contains("panicked"), "{err}");
+        let (code, err) = render_with(&dir, &["--precision", "f64"]);
+        assert_eq!(code, Some(0), "{err}");
+    }
+}
+
+/// Cameras whose view direction overflows or underflows would make every ray NaN (an
+/// all-black image): rejected. A sun direction whose length overflows is still a direction.
+#[test]
+fn cameras_without_a_usable_view_direction_are_rejected() {
+    let dir = scratch("camera-overflow");
+    edit(
+        &dir,
+        "bumps.toml",
+        "eye = [0.0, 1.6, 2.2]",
+        "eye = [1e308, 1e308, 1e308]",
+    );
+    edit(
+        &dir,
+        "bumps.toml",
+        "target = [0.0, 0.0, 0.0]",
+        "target = [-1e308, -1e308, -1e308]",
+    );
+    expect_error(&dir, &["bumps.toml", "view direction"]);
+    let dir = scratch("camera-underflow");
+    edit(
+        &dir,
+        "bumps.toml",
+        "eye = [0.0, 1.6, 2.2]",
+        "eye = [0.0, 0.0, 0.0]",
+    );
+    edit(
+        &dir,
+        "bumps.toml",
+        "target = [0.0, 0.0, 0.0]",
+        "target = [5e-324, 0.0, 0.0]",
+    );
+    expect_error(&dir, &["bumps.toml", "view direction"]);
+    let dir = scratch("sun-zero");
+    edit(
+        &dir,
+        "bumps.toml",
+        "sun = [0.4, 0.8, 0.3]",
+        "sun = [0.0, 0.0, 0.0]",
+    );
+    expect_error(&dir, &["bumps.toml", "sun direction", "zero"]);
+    let dir = scratch("sun-huge");
+    edit(
+        &dir,
+        "bumps.toml",
+        "sun = [0.4, 0.8, 0.3]",
+        "sun = [1e300, 1e300, 1e300]",
+    );
+    let (code, err) = render_with(&dir, &[]);
+    assert_eq!(code, Some(0), "{err}");
+}
+
+/// A NaN vertex normal is rejected, not silently zeroed.
+#[test]
+fn nan_vertex_normals_are_rejected() {
+    let dir = scratch("normal-nan");
+    edit(
+        &dir,
+        "quad.obj",
+        "vt 0 0\n",
+        "vn nan 1 0\nvn 0 1 0\nvt 0 0\n",
+    );
+    edit(
+        &dir,
+        "quad.obj",
+        "f 1/1 3/3 2/2\nf 1/1 4/4 3/3",
+        "f 1/1/1 3/3/2 2/2/2\nf 1/1/2 4/4/2 3/3/2",
+    );
+    expect_error(&dir, &["quad.obj", "normal", "not finite"]);
+}
+
+/// A tiny EXR whose header claims 100000 x 100000 pixels is refused from its header, before
+/// 40 GB are allocated (it used to abort the process).
+#[test]
+fn an_exr_claiming_a_huge_size_is_refused_before_allocating() {
+    let dir = scratch("exr-huge");
+    write_exr_heights(&dir.join("bumps.exr"), &dir.join("bumps.png"), "Y", |_| {});
+    let mut bytes = std::fs::read(dir.join("bumps.exr")).unwrap();
+    // The `dataWindow` attribute: name, type `box2i`, size 16, then xMin, yMin, xMax, yMax.
+    let key = b"dataWindow\0box2i\0";
+    let at = bytes
+        .windows(key.len())
+        .position(|w| w == key)
+        .expect("an EXR header has a dataWindow")
+        + key.len()
+        + 4;
+    for (k, v) in [(8, 99_999i32), (12, 99_999)] {
+        bytes[at + k..at + k + 4].copy_from_slice(&v.to_le_bytes());
+    }
+    std::fs::write(dir.join("bumps.exr"), &bytes).unwrap();
+    edit(&dir, "bumps.toml", "\"bumps.png\"", "\"bumps.exr\"");
+    expect_error(&dir, &["bumps.exr", "100000 x 100000", "largest side"]);
+}
