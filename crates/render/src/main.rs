@@ -431,10 +431,10 @@ fn main() -> ExitCode {
             }
             // Scene files are checked in f64 when loaded; a value finite in f64 may not be
             // in f32.
-            if method.slug().ends_with("-f32") {
-                if let Err(e) = built.check_precision::<f32>() {
-                    return fail("render", format!("{scene}: {e}"));
-                }
+            if method.slug().ends_with("-f32")
+                && let Err(e) = built.check_precision::<f32>()
+            {
+                return fail("render", format!("{scene}: {e}"));
             }
             let opts = ReportOptions {
                 scenes: vec![scene.clone()],
