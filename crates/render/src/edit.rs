@@ -13,6 +13,7 @@
 //! The partial update is verified: after all strokes, camera rays traced through the updated
 //! surface and through one built from scratch from the same samples hit at the same distances.
 
+use crate::material::Rng;
 use crate::scenes::{self, Content, Scene, Size};
 use crate::tessellate::Tessellated;
 use crate::tracers::Nonlinear;
@@ -71,23 +72,16 @@ pub struct EditReport {
     pub verify_mismatches: usize,
 }
 
-/// SplitMix64: reproducible stroke positions.
-fn next(state: &mut u64) -> u64 {
-    *state = state.wrapping_add(0x9e37_79b9_7f4a_7c15);
-    let mut z = *state;
-    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-    z ^ (z >> 31)
-}
-
 /// One stroke: a raised (or lowered) cosine bump of `brush x brush` samples at `(x0, y0)`;
 /// returns the edited sample range `[x0, y0, x1, y1)`.
-fn stroke(field: &mut HeightField, brush: usize, state: &mut u64) -> [i64; 4] {
+fn stroke(field: &mut HeightField, brush: usize, rng: &mut Rng) -> [i64; 4] {
     let side = field.side();
     let brush = brush.min(side);
-    let x0 = (next(state) % (side - brush + 1) as u64) as usize;
-    let y0 = (next(state) % (side - brush + 1) as u64) as usize;
-    let amplitude = if next(state).is_multiple_of(2) {
+    // Uniform in 0..=side - brush (next_f64 < 1, so the product stays below the count).
+    let positions = (side - brush + 1) as f64;
+    let x0 = (rng.next_f64() * positions) as usize;
+    let y0 = (rng.next_f64() * positions) as usize;
+    let amplitude = if rng.next_f64() < 0.5 {
         3000.0
     } else {
         -3000.0
@@ -128,10 +122,10 @@ pub fn run(opts: &EditOptions) -> Result<EditReport, String> {
         return Err("mountain is not a displacement scene".into());
     };
     let side = surface.field().side();
-    let mut state = 0x5eed_u64;
+    let mut rng = Rng::stream(0x5eed);
     let mut partial = Vec::with_capacity(opts.strokes);
     for _ in 0..opts.strokes {
-        let [x0, y0, x1, y1] = stroke(surface.field_mut(), opts.brush, &mut state);
+        let [x0, y0, x1, y1] = stroke(surface.field_mut(), opts.brush, &mut rng);
         let start = Instant::now();
         surface.field_mut().update_region(x0, y0, x1, y1);
         partial.push(start.elapsed().as_secs_f64());
