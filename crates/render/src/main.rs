@@ -187,8 +187,9 @@ enum Command {
     /// Leaks of nonlinear tracing, decided by exact arithmetic: rays that reach a base
     /// triangle from outside (so must have hit the displaced surface) but were not hit.
     Watertight {
-        /// Displacement scene: torus, fur, mountain, mountain-grazing (or cylinder, whose open
-        /// ends make only part of its rays decidable).
+        /// Displacement scene: torus, fur, mountain, mountain-grazing, fig9-displaced (or
+        /// cylinder, whose open ends make only part of its rays decidable), or a scene file
+        /// (`*.toml`) with a height map.
         scene: String,
         /// Rays: a square grid of camera rays with at least this many.
         #[arg(long, default_value_t = 65_536, value_parser = clap::value_parser!(u64).range(1..=100_000_000))]
@@ -555,20 +556,33 @@ fn main() -> ExitCode {
             scene_size,
             output,
         } => {
-            if !(SCENE_NAMES.contains(&scene.as_str())
-                || scenes::WATERTIGHT_SCENES.contains(&scene.as_str()))
-            {
-                return fail(
-                    "watertight",
-                    format!(
-                        "unknown scene '{scene}' (scenes: {})",
-                        scenes::WATERTIGHT_SCENES.join(", ")
-                    ),
-                );
-            }
-            let Some(built) = scenes::builtin(&scene, scene_size.into()) else {
-                return fail("watertight", "unknown scene");
+            let built = if scene.ends_with(".toml") {
+                match nlrt_render::scene_file::load(std::path::Path::new(&scene)) {
+                    Ok(s) => s,
+                    Err(e) => return fail("watertight", e),
+                }
+            } else {
+                let known = SCENE_NAMES.contains(&scene.as_str())
+                    || scenes::WATERTIGHT_SCENES.contains(&scene.as_str());
+                match scenes::builtin(&scene, scene_size.into()).filter(|_| known) {
+                    Some(s) => s,
+                    None => {
+                        return fail(
+                            "watertight",
+                            format!(
+                                "unknown scene '{scene}' (scenes: {}, or a scene file *.toml)",
+                                scenes::WATERTIGHT_SCENES.join(", ")
+                            ),
+                        );
+                    }
+                }
             };
+            // Scene files are checked in f64 when loaded; f32 is judged too unless excluded.
+            if !matches!(precision, Some(Precision::F64))
+                && let Err(e) = built.check_precision::<f32>()
+            {
+                return fail("watertight", format!("{scene}: {e}"));
+            }
             let side = ((rays as f64).sqrt().ceil() as usize).max(1);
             let mut methods = watertight::METHODS
                 .into_iter()

@@ -529,3 +529,31 @@ fn an_exr_claiming_a_huge_size_is_refused_before_allocating() {
     edit(&dir, "bumps.toml", "\"bumps.png\"", "\"bumps.exr\"");
     expect_error(&dir, &["bumps.exr", "100000 x 100000", "largest side"]);
 }
+
+/// `nlrt watertight` judges a scene file: the example's open quad has decidable rays (those
+/// through its top cap) and nonlinear tracing leaks none of them.
+#[test]
+fn watertight_judges_scene_files() {
+    let dir = scratch("watertight");
+    let out = nlrt(&[
+        "watertight",
+        dir.join("bumps.toml").to_str().unwrap(),
+        "--rays",
+        "4096",
+        "--method",
+        "nonlinear",
+    ]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let rows: Vec<&str> = text.lines().filter(|l| l.contains("nonlinear")).collect();
+    assert_eq!(rows.len(), 2, "{text}");
+    for row in rows {
+        let cells: Vec<&str> = row.split('|').map(str::trim).collect();
+        let (decided, leaks): (u64, u64) = (cells[4].parse().unwrap(), cells[5].parse().unwrap());
+        assert!(decided > 0 && leaks == 0, "{row}");
+    }
+}
