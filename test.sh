@@ -16,6 +16,6 @@ if ! command -v m4 >/dev/null 2>&1; then
 fi
 
 # The library crates must build without std (libm only).
-cargo build --quiet -p nlrt-poly -p nlrt-shellmap -p nlrt-accel --no-default-features --features libm
+cargo build --quiet -p nlrt-poly -p nlrt-shellmap -p nlrt-accel -p nlrt-baselines --no-default-features --features libm
 # Every test of the workspace: unit, integration (oracle, proptest, fuzz-corpus replay), doc tests.
 cargo test --workspace "$@"
