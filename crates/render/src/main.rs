@@ -322,11 +322,11 @@ fn report_command(output: PathBuf, args: &RenderArgs, solver_samples: usize) -> 
         let Some(scene) = scenes::builtin(name, args.scene_size.into()) else {
             continue;
         };
-        for method in watertight::METHODS {
-            let r = match watertight::measure(&scene, 256, method) {
-                Ok(r) => r,
-                Err(e) => return fail("report", e),
-            };
+        let reports = match watertight::measure_all(&scene, 256, &watertight::METHODS) {
+            Ok(r) => r,
+            Err(e) => return fail("report", e),
+        };
+        for r in reports {
             let (lo, hi) = r.wilson_95();
             leaks_md.push_str(&format!(
                 "| {name} | {} | {} | {} | {} | {:.2e} | [{:.1e}, {:.1e}] | {} |\n",
@@ -637,11 +637,12 @@ fn main() -> ExitCode {
                 "| scene | method | rays | decided | leaks | rate | 95% interval | hit distance vs oracle: median / p99 / max rel. error (hits compared, unverified) | seconds |"
             );
             println!("|---|---|---|---|---|---|---|---|---|");
-            for m in methods {
-                let r = match watertight::measure(&built, side, m) {
-                    Ok(r) => r,
-                    Err(e) => return fail("watertight", e),
-                };
+            let methods: Vec<Method> = methods.collect();
+            let reports = match watertight::measure_all(&built, side, &methods) {
+                Ok(r) => r,
+                Err(e) => return fail("watertight", e),
+            };
+            for r in reports {
                 let (lo, hi) = r.wilson_95();
                 println!(
                     "| {scene} | {} | {} | {} | {} | {:.2e} | [{:.1e}, {:.1e}] | {} | {:.1} |",

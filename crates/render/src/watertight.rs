@@ -297,17 +297,75 @@ fn to_f64<T: Real>(v: T::Vec3) -> [f64; 3] {
 /// A scene that is not a displacement scene, or the pre-tessellated reference (its f64
 /// triangles are not the surface the oracle's criterion is stated for).
 pub fn measure(scene: &Scene, rays_side: usize, method: Method) -> Result<LeakReport, String> {
+    let mut reports = measure_all(scene, rays_side, &[method])?;
+    Ok(reports.remove(0))
+}
+
+/// [`measure`] for several methods, in their order. The rays and which of them are judged
+/// depend on the scene and the precision only, so they are decided once per precision
+/// (each precision's first report's `seconds` includes that).
+///
+/// # Errors
+/// As [`measure`], for the first method that cannot be judged.
+pub fn measure_all(
+    scene: &Scene,
+    rays_side: usize,
+    methods: &[Method],
+) -> Result<Vec<LeakReport>, String> {
+    for &method in methods {
+        judged_precision(method)?;
+    }
+    let in_f32: Vec<Method> = methods
+        .iter()
+        .copied()
+        .filter(|&m| judged_precision(m) == Ok(Precision::F32))
+        .collect();
+    let in_f64: Vec<Method> = methods
+        .iter()
+        .copied()
+        .filter(|&m| judged_precision(m) == Ok(Precision::F64))
+        .collect();
+    let mut f32_reports = if in_f32.is_empty() {
+        Vec::new()
+    } else {
+        measure_in::<f32>(scene, rays_side, &in_f32)?
+    }
+    .into_iter();
+    let mut f64_reports = if in_f64.is_empty() {
+        Vec::new()
+    } else {
+        measure_in::<f64>(scene, rays_side, &in_f64)?
+    }
+    .into_iter();
+    Ok(methods
+        .iter()
+        .filter_map(|&m| match judged_precision(m) {
+            Ok(Precision::F32) => f32_reports.next(),
+            _ => f64_reports.next(),
+        })
+        .collect())
+}
+
+/// The precisions a measurement runs in.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Precision {
+    F32,
+    F64,
+}
+
+/// The precision `method` is judged in, or why it is not judged.
+fn judged_precision(method: Method) -> Result<Precision, String> {
     match method {
-        Method::NonlinearF32 => measure_in::<f32>(scene, rays_side, method),
-        Method::NonlinearF64 => measure_in::<f64>(scene, rays_side, method),
-        Method::AffineF32 => measure_in::<f32>(scene, rays_side, method),
-        Method::AffineF64 => measure_in::<f64>(scene, rays_side, method),
-        Method::MarchingF32 => measure_in::<f32>(scene, rays_side, method),
-        Method::MarchingF64 => measure_in::<f64>(scene, rays_side, method),
-        Method::DistanceMapF32 => measure_in::<f32>(scene, rays_side, method),
-        Method::DistanceMapF64 => measure_in::<f64>(scene, rays_side, method),
-        Method::TetrahedraF32 => measure_in::<f32>(scene, rays_side, method),
-        Method::TetrahedraF64 => measure_in::<f64>(scene, rays_side, method),
+        Method::NonlinearF32
+        | Method::AffineF32
+        | Method::MarchingF32
+        | Method::DistanceMapF32
+        | Method::TetrahedraF32 => Ok(Precision::F32),
+        Method::NonlinearF64
+        | Method::AffineF64
+        | Method::MarchingF64
+        | Method::DistanceMapF64
+        | Method::TetrahedraF64 => Ok(Precision::F64),
         Method::Tessellated
         | Method::EmbreeF32
         | Method::TessellatedCurved
@@ -331,27 +389,15 @@ pub fn measure(scene: &Scene, rays_side: usize, method: Method) -> Result<LeakRe
     }
 }
 
-fn measure_in<T: Real>(
+/// Which rays of the `n x n` grid are judged, and where: per grid cell, the exact distance
+/// of the base crossing and its base triangle, or `None` for a ray the criterion cannot
+/// decide. It depends on the scene and the precision only, so the methods of one precision
+/// share it (the exact GMP crossings are most of a measurement's time).
+fn decide<T: Real>(
     scene: &Scene,
-    rays_side: usize,
-    method: Method,
-) -> Result<LeakReport, String> {
-    if !matches!(scene.content, Content::Displacement(_)) {
-        return Err(format!(
-            "scene '{}' is shell-mapped; watertightness is measured on displacement scenes",
-            scene.name
-        ));
-    }
-    let start = std::time::Instant::now();
-    let affine = matches!(method, Method::AffineF32 | Method::AffineF64);
-    let marching = matches!(method, Method::MarchingF32 | Method::MarchingF64);
-    let tetrahedra = matches!(method, Method::TetrahedraF32 | Method::TetrahedraF64);
-    let tracer = Nonlinear::<T>::new(scene);
-    let Nonlinear::Displaced(surface) = &tracer else {
-        unreachable!("displacement scene")
-    };
-    let map = matches!(method, Method::DistanceMapF32 | Method::DistanceMapF64)
-        .then(|| crate::tracers::distance_map_of(surface.field()));
+    surface: &nlrt_accel::DisplacedSurface<T>,
+    n: usize,
+) -> Vec<Option<(f64, usize)>> {
     let criteria = criteria(scene);
     // Base and top-cap triangles exactly as the tracer's prisms have them.
     let mesh = surface.mesh();
@@ -379,16 +425,13 @@ fn measure_in<T: Real>(
         .map(|(b, t, _)| Aabb::of_points(b.iter().chain(t.iter()).map(|&p| DVec3::from(p))))
         .collect();
     let bvh = Bvh4::build(&boxes, 1);
-    let n = rays_side;
-    let verdicts: Vec<Verdict> = (0..n * n)
+    (0..n * n)
         .into_par_iter()
         .map(|k| {
             let (x, y) = ((k % n) as f64 + 0.5, (k / n) as f64 + 0.5);
             let d = scene.camera.direction(x / n as f64, y / n as f64, 1.0);
             let v = |a: DVec3| T::Vec3::new(T::from_f64(a.x), T::from_f64(a.y), T::from_f64(a.z));
-            let Some(ray) = Ray::new(v(scene.camera.eye), v(d)) else {
-                return Verdict::NotDecided;
-            };
+            let ray = Ray::<T>::new(v(scene.camera.eye), v(d))?;
             let (o, dir) = (to_f64::<T>(ray.origin), to_f64::<T>(ray.dir));
             // Nearest exact base crossing, and the nearest front top-cap crossing.
             let slab = SlabRay::new(DVec3::from(o), DVec3::from(dir));
@@ -414,7 +457,7 @@ fn measure_in<T: Real>(
                 None // visit every candidate
             });
             let Some((t_base, true, base_triangle)) = base else {
-                return Verdict::NotDecided;
+                return None;
             };
             let decided = match criteria[base_triangle] {
                 Criterion::Base => true,
@@ -422,8 +465,48 @@ fn measure_in<T: Real>(
                 Criterion::Seam | Criterion::NoSurface => false,
             };
             if !decided {
-                return Verdict::NotDecided;
+                return None;
             }
+            Some((t_base, base_triangle))
+        })
+        .collect()
+}
+
+fn measure_in<T: Real>(
+    scene: &Scene,
+    rays_side: usize,
+    methods: &[Method],
+) -> Result<Vec<LeakReport>, String> {
+    if !matches!(scene.content, Content::Displacement(_)) {
+        return Err(format!(
+            "scene '{}' is shell-mapped; watertightness is measured on displacement scenes",
+            scene.name
+        ));
+    }
+    let mut start = std::time::Instant::now();
+    let tracer = Nonlinear::<T>::new(scene);
+    let Nonlinear::Displaced(surface) = &tracer else {
+        unreachable!("displacement scene")
+    };
+    let n = rays_side;
+    let decisions = decide(scene, surface, n);
+    let mut reports = Vec::with_capacity(methods.len());
+    for &method in methods {
+        let affine = matches!(method, Method::AffineF32 | Method::AffineF64);
+        let marching = matches!(method, Method::MarchingF32 | Method::MarchingF64);
+        let tetrahedra = matches!(method, Method::TetrahedraF32 | Method::TetrahedraF64);
+        let map = matches!(method, Method::DistanceMapF32 | Method::DistanceMapF64)
+            .then(|| crate::tracers::distance_map_of(surface.field()));
+        let verdicts: Vec<Verdict> = (0..n * n)
+            .into_par_iter()
+            .map(|k| {
+                let (x, y) = ((k % n) as f64 + 0.5, (k / n) as f64 + 0.5);
+                let Some((t_base, base_triangle)) = decisions[k] else {
+                    return Verdict::NotDecided;
+                };
+                let Some(ray) = grid_ray::<T>(scene, n, k) else {
+                    return Verdict::NotDecided;
+                };
             let mut stats = TraversalStats::default();
             let hit = if tetrahedra {
                 surface
@@ -473,25 +556,28 @@ fn measure_in<T: Real>(
             }
         })
         .collect();
-    let decided = verdicts
-        .iter()
-        .filter(|v| **v != Verdict::NotDecided)
-        .count();
-    let leaks = verdicts
-        .iter()
-        .filter(|v| matches!(v, Verdict::Leak(_)))
-        .count();
-    let nonlinear = !(affine || marching || tetrahedra || map.is_some());
-    let distance_error = nonlinear.then(|| distance_error(scene, surface, n));
-    Ok(LeakReport {
-        method,
-        distance_error,
-        rays: n * n,
-        decided,
-        leaks,
-        verdicts,
-        seconds: start.elapsed().as_secs_f64(),
-    })
+        let decided = verdicts
+            .iter()
+            .filter(|v| **v != Verdict::NotDecided)
+            .count();
+        let leaks = verdicts
+            .iter()
+            .filter(|v| matches!(v, Verdict::Leak(_)))
+            .count();
+        let nonlinear = !(affine || marching || tetrahedra || map.is_some());
+        let distance_error = nonlinear.then(|| distance_error(scene, surface, n));
+        reports.push(LeakReport {
+            method,
+            distance_error,
+            rays: n * n,
+            decided,
+            leaks,
+            verdicts,
+            seconds: start.elapsed().as_secs_f64(),
+        });
+        start = std::time::Instant::now();
+    }
+    Ok(reports)
 }
 
 /// The ray of grid cell `k` of an `n x n` grid, in precision `T`.
