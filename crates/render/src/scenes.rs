@@ -373,43 +373,75 @@ impl Scene {
     /// # Errors
     /// The message names the value and the precision.
     pub fn check_precision<T: nlrt_poly::Real>(&self) -> Result<(), String> {
-        use nlrt_poly::Vector3;
-        let precision = if core::mem::size_of::<T>() == 4 {
-            "f32"
-        } else {
-            "f64"
-        };
+        match &self.content {
+            Content::Displacement(_) => self.displaced_surface::<T>().map(|_| ()),
+            Content::Shell(_) => self.shell_surface::<T>().map(|_| ()),
+        }
+    }
+
+    /// The height scale and tiling in precision `T`, or which of them is finite in f64 but
+    /// not in `T`.
+    fn scale_and_tiling<T: nlrt_poly::Real>(&self) -> Result<(T, T), String> {
         let in_precision = |what: &str, v: f64| {
             let t = T::from_f64(v);
             if v.is_finite() && !t.is_finite() {
                 Err(format!(
-                    "{what} = {v:e} is finite but not representable in {precision} (use --precision f64)"
+                    "{what} = {v:e} is finite but not representable in {} (use --precision f64)",
+                    T::NAME
                 ))
             } else {
                 Ok(t)
             }
         };
-        let scale = in_precision("height_scale", self.height_scale)?;
-        let tiling = in_precision("tiling", self.tiling)?;
+        Ok((
+            in_precision("height_scale", self.height_scale)?,
+            in_precision("tiling", self.tiling)?,
+        ))
+    }
+
+    /// The displaced surface of a displacement scene in precision `T` (what nonlinear
+    /// tracing and every method on the same prisms build on).
+    ///
+    /// # Errors
+    /// Not a displacement scene, or the reasons of [`Scene::check_precision`].
+    pub fn displaced_surface<T: nlrt_poly::Real>(&self) -> Result<DisplacedSurface<T>, String> {
+        let Content::Displacement(field) = &self.content else {
+            return Err(format!("scene '{}' is not a displacement scene", self.name));
+        };
+        let (scale, tiling) = self.scale_and_tiling::<T>()?;
         let mesh = self
             .try_mesh::<T>()
-            .map_err(|e| format!("base mesh in {precision}: {e}"))?;
-        let limit = "texture coordinates x tiling x map side must stay within 2^22 texels";
-        match &self.content {
-            Content::Displacement(field) => {
-                DisplacedSurface::new(mesh, field.clone(), scale, tiling)
-                    .map_err(|e| format!("in {precision}: {e} ({limit})"))?;
-            }
-            Content::Shell(object) => {
-                let v =
-                    |p: &DVec3| T::Vec3::new(T::from_f64(p.x), T::from_f64(p.y), T::from_f64(p.z));
-                let object = ShellObject::new(object.iter().map(|t| t.map(|p| v(&p))).collect())
-                    .map_err(|e| format!("object in {precision}: {e}"))?;
-                ShellSurface::new(mesh, object, scale, tiling)
-                    .map_err(|e| format!("in {precision}: {e} (texture coordinates x tiling must stay within 2^22 tiles)"))?;
-            }
-        }
-        Ok(())
+            .map_err(|e| format!("base mesh in {}: {e}", T::NAME))?;
+        DisplacedSurface::new(mesh, field.clone(), scale, tiling).map_err(|e| {
+            format!(
+                "in {}: {e} (texture coordinates x tiling x map side must stay within 2^22 texels)",
+                T::NAME
+            )
+        })
+    }
+
+    /// The shell-mapped surface of a shell scene in precision `T`.
+    ///
+    /// # Errors
+    /// Not a shell scene, or the reasons of [`Scene::check_precision`].
+    pub fn shell_surface<T: nlrt_poly::Real>(&self) -> Result<ShellSurface<T>, String> {
+        use nlrt_poly::Vector3;
+        let Content::Shell(object) = &self.content else {
+            return Err(format!("scene '{}' is not a shell-mapped scene", self.name));
+        };
+        let (scale, tiling) = self.scale_and_tiling::<T>()?;
+        let mesh = self
+            .try_mesh::<T>()
+            .map_err(|e| format!("base mesh in {}: {e}", T::NAME))?;
+        let v = |p: &DVec3| T::Vec3::new(T::from_f64(p.x), T::from_f64(p.y), T::from_f64(p.z));
+        let object = ShellObject::new(object.iter().map(|t| t.map(|p| v(&p))).collect())
+            .map_err(|e| format!("object in {}: {e}", T::NAME))?;
+        ShellSurface::new(mesh, object, scale, tiling).map_err(|e| {
+            format!(
+                "in {}: {e} (texture coordinates x tiling must stay within 2^22 tiles)",
+                T::NAME
+            )
+        })
     }
 
     /// The base mesh in precision `T`, or why it is invalid there.

@@ -8,14 +8,14 @@ use crate::material::Rng;
 use crate::scenes::{Content, Scene};
 use crate::tessellate::Tessellated;
 use crate::tracer::{TraceHit, Tracer, ray_in};
-use nlrt_accel::{DisplacedSurface, HeightField, ShellObject, ShellSurface, TraversalStats};
+use nlrt_accel::{DisplacedSurface, HeightField, ShellSurface, TraversalStats};
 use nlrt_baselines::{
     AffineTracing as _, ConeMap, ConeOptions, ConeTraced as _, ConeTracing, DistanceMap,
     MarchOptions, Marching as _, ProjectiveSurface, Rectification, TetrahedralShells as _,
     VertexQuadrics, VoxelMarching as _, VoxelObject,
 };
+use nlrt_poly::Real;
 use nlrt_poly::glam::DVec3;
-use nlrt_poly::{Real, Vector3};
 
 /// Nonlinear ray tracing in precision `T`: a displaced surface or a shell-mapped object.
 pub enum Nonlinear<T: Real> {
@@ -32,27 +32,12 @@ impl<T: Real> Nonlinear<T> {
     /// Never for valid scenes (built-in scenes are).
     #[must_use]
     pub fn new(scene: &Scene) -> Self {
-        let (scale, tiling) = (T::from_f64(scene.height_scale), T::from_f64(scene.tiling));
+        // Scenes are checked by `Scene::check_precision` before they are built (built-in
+        // scenes are valid by construction).
+        let valid = "a scene checked by Scene::check_precision";
         match &scene.content {
-            Content::Displacement(field) => Self::Displaced(
-                DisplacedSurface::new(scene.mesh::<T>(), field.clone(), scale, tiling)
-                    .expect("valid scene"),
-            ),
-            Content::Shell(object) => {
-                let v =
-                    |p: &DVec3| T::Vec3::new(T::from_f64(p.x), T::from_f64(p.y), T::from_f64(p.z));
-                let object = ShellObject::new(
-                    object
-                        .iter()
-                        .map(|t| [v(&t[0]), v(&t[1]), v(&t[2])])
-                        .collect(),
-                )
-                .expect("valid object");
-                Self::Shell(
-                    ShellSurface::new(scene.mesh::<T>(), object, scale, tiling)
-                        .expect("valid scene"),
-                )
-            }
+            Content::Displacement(_) => Self::Displaced(scene.displaced_surface().expect(valid)),
+            Content::Shell(_) => Self::Shell(scene.shell_surface().expect(valid)),
         }
     }
 }
