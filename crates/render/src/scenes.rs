@@ -94,18 +94,28 @@ pub const SCENE_NAMES: [&str; 9] = [
 
 /// Scenes `nlrt watertight` measures by default (displacement scenes whose rays can be
 /// decided: closed meshes, or the mountain's convex shell).
-pub const WATERTIGHT_SCENES: [&str; 5] = [
+pub const WATERTIGHT_SCENES: [&str; 8] = [
     "torus",
     "fur",
     "mountain",
     "mountain-grazing",
     "fig9-displaced",
+    "torus-spikes",
+    "torus-tilted",
+    "torus-twisted",
 ];
 
-/// Built-in scene variants made for one measurement, not part of the default report:
-/// `mountain-grazing` (the mountain seen at grazing angles) and `fig9-displaced` (Fig. 9's
-/// columns with a height map), for `nlrt watertight`, and usable everywhere a scene is.
-pub const VARIANT_NAMES: [&str; 2] = ["mountain-grazing", "fig9-displaced"];
+/// Built-in scene variants made for one measurement, not part of the default report's
+/// renders: `mountain-grazing` (the mountain seen at grazing angles), `fig9-displaced` (Fig.
+/// 9's columns with a height map) and the ghost-hit tori ([`ghost_torus`]), for `nlrt
+/// watertight`, and usable everywhere a scene is.
+pub const VARIANT_NAMES: [&str; 5] = [
+    "mountain-grazing",
+    "fig9-displaced",
+    "torus-spikes",
+    "torus-tilted",
+    "torus-twisted",
+];
 
 /// Whether `name` is a built-in scene or variant.
 #[must_use]
@@ -143,6 +153,9 @@ pub fn builtin(name: &str, size: Size) -> Option<Scene> {
         "scales" => Some(scales()),
         "fig9" => Some(fig9()),
         "fig9-displaced" => Some(fig9_displaced(if big { 1024 } else { 256 })),
+        "torus-spikes" | "torus-tilted" | "torus-twisted" => {
+            ghost_torus(name, if big { 256 } else { 64 })
+        }
         "cornell" => Some(cornell(if big { 15 } else { 6 })),
         "feathers" => Some(feathers()),
         "highpoly" => Some(highpoly(if big { 270 } else { 32 })),
@@ -641,6 +654,81 @@ pub fn torus_scene(side: usize) -> Scene {
         sun: DVec3::new(0.3, 0.8, 0.5).normalize(),
         material: Material::Diffuse,
     }
+}
+
+/// The classes of base mesh on which hits in front of the true surface ("ghost hits") are
+/// hunted (`nlrt watertight`): prisms that self-intersect, strongly sheared prisms, and
+/// twisted texture coordinates, each on a closed torus (so every ray reaching the base is
+/// judged for leaks too). `torus-spikes`: a coarse torus (12 x 12 quads, tube radius 0.4)
+/// whose height scale 0.5 exceeds the tube radius, so the prisms on the inner side cross the
+/// axis and intersect each other, under single-texel spikes (one sample at full height in 8 of
+/// each 64 texels, the rest 0). `torus-tilted`: vertex normals tilted by up to 45 degrees at
+/// random (the same at a seam's duplicated vertices, so the surface stays closed), so
+/// neighbouring prisms shear against each other, under a 0 / full-height checkerboard.
+/// `torus-twisted`: texture coordinates twisted by two turns of the tube around the ring
+/// (whole tiles at the seam), an fBm map and a height scale 0.6, 1.5 times the tube radius.
+#[must_use]
+pub fn ghost_torus(kind: &str, side: usize) -> Option<Scene> {
+    let (n, height_scale, heights): (usize, f64, Vec<f32>) = match kind {
+        "torus-spikes" => (
+            12,
+            0.5,
+            (0..side * side)
+                .map(|k| {
+                    let (i, j) = ((k % side) as i64, (k / side) as i64);
+                    f32::from(lattice(i, j, 71) < 1.0 / 8.0)
+                })
+                .collect(),
+        ),
+        "torus-tilted" => (
+            32,
+            0.15,
+            (0..side * side)
+                .map(|k| f32::from((k % side + k / side) % 2 == 1))
+                .collect(),
+        ),
+        "torus-twisted" => (32, 0.6, fbm_map(side, 4, 6, 53)),
+        _ => return None,
+    };
+    let (positions, mut normals, mut uvs, triangles) = torus(n, 1.0, 0.4);
+    if kind == "torus-tilted" {
+        // A random tilt per vertex position: a unit vector perpendicular to the normal, by
+        // an angle up to 45 degrees.
+        for (normal, p) in normals.iter_mut().zip(&positions) {
+            let key = |x: f64, salt: u64| {
+                lattice(
+                    x.to_bits() as i64,
+                    salt as i64,
+                    p.y.to_bits() ^ p.z.to_bits(),
+                )
+            };
+            let (angle, turn) = (key(p.x, 1) * std::f64::consts::FRAC_PI_4, key(p.x, 2) * TAU);
+            let side_a = normal.any_orthonormal_vector();
+            let side_b = normal.cross(side_a);
+            let across = side_a * turn.cos() + side_b * turn.sin();
+            *normal = (*normal * angle.cos() + across * angle.sin()).normalize();
+        }
+    }
+    if kind == "torus-twisted" {
+        for uv in &mut uvs {
+            uv.y += 2.0 * uv.x;
+        }
+    }
+    let name = match kind {
+        "torus-spikes" => "torus-spikes",
+        "torus-tilted" => "torus-tilted",
+        _ => "torus-twisted",
+    };
+    let mut scene = torus_scene(side);
+    scene.name = name;
+    scene.positions = positions;
+    scene.normals = normals;
+    scene.uvs = uvs;
+    scene.triangles = triangles;
+    scene.content = Content::Displacement(field(side, &heights));
+    scene.height_scale = height_scale;
+    scene.tiling = 1.0;
+    Some(scene)
 }
 
 /// Fig. 9: a Cornell-box object instanced once in the shell of a two-triangle rectangle, in

@@ -78,6 +78,9 @@ pub struct LeakReport {
     pub verdicts: Vec<Verdict>,
     /// Hit distances against the oracle (nonlinear tracing only).
     pub distance_error: Option<DistanceError>,
+    /// Every hit judged against the oracle (nonlinear tracing only: the other methods trace
+    /// other surfaces, flat world triangles or samples).
+    pub ghosts: Option<GhostCount>,
     /// Seconds.
     pub seconds: f64,
 }
@@ -99,6 +102,24 @@ pub struct DistanceError {
     pub p99: f64,
     /// Largest.
     pub max: f64,
+}
+
+/// Every reported hit of a grid judged against the oracle's true hits on the microtriangles
+/// around it (the hit texel and its 8 neighbours, in the neighbouring prisms too when the hit
+/// lies on a base edge; 512-bit MPFR on exactly the tracer's values). A hit is confirmed when
+/// a true hit lies within [`LEAK_TOLERANCE`] (relative) of its distance; otherwise it is a
+/// ghost when the nearest true hit there is farther or absent (the tracer reports a surface in
+/// front of the true one), and too far when it is nearer (the tracer passed the surface).
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct GhostCount {
+    /// Hits judged (every ray of the grid that hit).
+    pub hits: usize,
+    /// Hits in front of the true surface (or where it has none).
+    pub ghosts: usize,
+    /// Hits beyond a nearer true hit of the same neighbourhood.
+    pub too_far: usize,
+    /// Grid cells (row-major) of the ghost hits, for the leak image.
+    pub ghost_cells: Vec<u32>,
 }
 
 /// Hits sampled for [`DistanceError`] (each costs 18 oracle solves, ~1 ms).
@@ -291,19 +312,21 @@ fn to_f64<T: Real>(v: T::Vec3) -> [f64; 3] {
 }
 
 /// Runs `rays_side x rays_side` camera rays (pixel centres) through `scene` with `method`
-/// (nonlinear tracing or tessellation-free mapping, in either precision).
+/// (nonlinear tracing or tessellation-free mapping, in either precision); every hit of
+/// nonlinear tracing is judged for ghosts.
 ///
 /// # Errors
 /// A scene that is not a displacement scene, or the pre-tessellated reference (its f64
 /// triangles are not the surface the oracle's criterion is stated for).
 pub fn measure(scene: &Scene, rays_side: usize, method: Method) -> Result<LeakReport, String> {
-    let mut reports = measure_all(scene, rays_side, &[method])?;
+    let mut reports = measure_all(scene, rays_side, &[method], JudgedHits::Every)?;
     Ok(reports.remove(0))
 }
 
-/// [`measure`] for several methods, in their order. The rays and which of them are judged
-/// depend on the scene and the precision only, so they are decided once per precision
-/// (each precision's first report's `seconds` includes that).
+/// [`measure`] for several methods, in their order, with nonlinear tracing's hits judged for
+/// ghosts as `judged_hits` says. The rays and which of them are judged depend on the scene and
+/// the precision only, so they are decided once per precision (each precision's first
+/// report's `seconds` includes that).
 ///
 /// # Errors
 /// As [`measure`], for the first method that cannot be judged.
@@ -311,6 +334,7 @@ pub fn measure_all(
     scene: &Scene,
     rays_side: usize,
     methods: &[Method],
+    judged_hits: JudgedHits,
 ) -> Result<Vec<LeakReport>, String> {
     for &method in methods {
         judged_precision(method)?;
@@ -328,13 +352,13 @@ pub fn measure_all(
     let mut f32_reports = if in_f32.is_empty() {
         Vec::new()
     } else {
-        measure_in::<f32>(scene, rays_side, &in_f32)?
+        measure_in::<f32>(scene, rays_side, &in_f32, judged_hits)?
     }
     .into_iter();
     let mut f64_reports = if in_f64.is_empty() {
         Vec::new()
     } else {
-        measure_in::<f64>(scene, rays_side, &in_f64)?
+        measure_in::<f64>(scene, rays_side, &in_f64, judged_hits)?
     }
     .into_iter();
     Ok(methods
@@ -476,6 +500,7 @@ fn measure_in<T: Real>(
     scene: &Scene,
     rays_side: usize,
     methods: &[Method],
+    judged_hits: JudgedHits,
 ) -> Result<Vec<LeakReport>, String> {
     if !matches!(scene.content, Content::Displacement(_)) {
         return Err(format!(
@@ -565,10 +590,15 @@ fn measure_in<T: Real>(
             .filter(|v| matches!(v, Verdict::Leak(_)))
             .count();
         let nonlinear = !(affine || marching || tetrahedra || map.is_some());
-        let distance_error = nonlinear.then(|| distance_error(scene, surface, n));
+        let truth = nonlinear.then(|| TrueSurface::new(surface));
+        let distance_error = truth.as_ref().map(|t| distance_error(scene, t, n));
+        let ghosts = truth
+            .as_ref()
+            .map(|t| ghost_count(scene, t, n, judged_hits));
         reports.push(LeakReport {
             method,
             distance_error,
+            ghosts,
             rays: n * n,
             decided,
             leaks,
@@ -588,96 +618,239 @@ fn grid_ray<T: Real>(scene: &Scene, n: usize, k: usize) -> Option<Ray<T>> {
     Ray::new(v(scene.camera.eye), v(d))
 }
 
-/// [`DistanceError`] over about [`DISTANCE_SAMPLES`] evenly spaced rays of the grid that hit.
-fn distance_error<T: Real>(
-    scene: &Scene,
-    surface: &nlrt_accel::DisplacedSurface<T>,
-    n: usize,
-) -> DistanceError {
-    use nlrt_oracle::shell::{ShellScene, true_microtriangle_hit};
-    let field = surface.field();
-    let texel_size = T::ONE / T::from_f64(field.side() as f64);
-    let hits: Vec<(usize, Ray<T>, nlrt_accel::SurfaceHit<T>)> = (0..n * n)
-        .into_par_iter()
-        .filter_map(|k| {
-            let ray = grid_ray::<T>(scene, n, k)?;
-            let hit =
-                surface.intersect(&ray, T::ZERO, T::INFINITY, &mut TraversalStats::default())?;
-            Some((k, ray, hit))
-        })
-        .collect();
-    let stride = hits.len().div_ceil(DISTANCE_SAMPLES).max(1);
-    let errors: Vec<Option<f64>> = hits
-        .par_iter()
-        .step_by(stride)
-        .map(|(_, ray, hit)| {
-            let coord = |i: i32| (T::from_i32(i) * texel_size).to_f64();
-            let height = |s: u16| {
-                (T::from_i32(i32::from(s)) / T::from_i32(i32::from(nlrt_accel::HEIGHT_ONE)))
-                    .to_f64()
+/// The oracle's view of the microtriangles around a hit, exactly as the tracer has them (its
+/// precision's prisms, ray, texel corners and heights).
+struct TrueSurface<'a, T: Real> {
+    surface: &'a nlrt_accel::DisplacedSurface<T>,
+    /// Per base triangle, the other triangles sharing a vertex position with it.
+    neighbours: Vec<Vec<usize>>,
+}
+
+impl<'a, T: Real> TrueSurface<'a, T> {
+    fn new(surface: &'a nlrt_accel::DisplacedSurface<T>) -> Self {
+        use std::collections::HashMap;
+        let mesh = surface.mesh();
+        let key = |v: u32| {
+            let p = to_f64::<T>(mesh.positions()[v as usize]);
+            p.map(f64::to_bits)
+        };
+        let mut by_vertex: HashMap<[u64; 3], Vec<usize>> = HashMap::new();
+        for i in 0..mesh.triangle_count() {
+            for v in mesh.triangle(i) {
+                by_vertex.entry(key(v)).or_default().push(i);
+            }
+        }
+        let neighbours = (0..mesh.triangle_count())
+            .map(|i| {
+                let mut others: Vec<usize> = mesh
+                    .triangle(i)
+                    .iter()
+                    .flat_map(|&v| by_vertex[&key(v)].iter().copied())
+                    .filter(|&o| o != i)
+                    .collect();
+                others.sort_unstable();
+                others.dedup();
+                others
+            })
+            .collect();
+        Self {
+            surface,
+            neighbours,
+        }
+    }
+
+    /// The nearest true hit at `t >= t_min` on the two microtriangles of `texel` in the prism
+    /// of base triangle `triangle`.
+    fn texel_hit(&self, ray: &Ray<T>, triangle: usize, texel: [i32; 2], t_min: f64) -> Option<f64> {
+        use nlrt_oracle::shell::{ShellScene, true_microtriangle_hit};
+        let field = self.surface.field();
+        let texel_size = T::ONE / T::from_f64(field.side() as f64);
+        let coord = |i: i32| (T::from_i32(i) * texel_size).to_f64();
+        let height = |s: u16| {
+            (T::from_i32(i32::from(s)) / T::from_i32(i32::from(nlrt_accel::HEIGHT_ONE))).to_f64()
+        };
+        let prism = self.surface.prism(triangle);
+        let [x, y] = texel;
+        let c = field.texel_corners(i64::from(x), i64::from(y)).map(height);
+        let (u0, v0, u1, v1) = (coord(x), coord(y), coord(x + 1), coord(y + 1));
+        let corners = [
+            [u0, v0, c[0]],
+            [u1, v0, c[1]],
+            [u1, v1, c[3]],
+            [u0, v1, c[2]],
+        ];
+        let mut best: Option<f64> = None;
+        for tri in [
+            [corners[0], corners[1], corners[2]],
+            [corners[0], corners[2], corners[3]],
+        ] {
+            let shell = ShellScene {
+                p: prism.p.map(to_f64::<T>),
+                n: prism.n.map(to_f64::<T>),
+                uv: prism.uv.map(|t| [t.x().to_f64(), t.y().to_f64()]),
+                origin: to_f64::<T>(ray.origin),
+                dir: to_f64::<T>(ray.dir),
+                tri,
             };
-            // The true nearest hit on the 3 x 3 texels around the hit texel in `triangle`'s prism.
-            let nearest_in = |triangle: usize| {
-                let prism = surface.prism(triangle);
-                let mut best: Option<f64> = None;
-                for dy in -1..=1 {
-                    for dx in -1..=1 {
-                        let (x, y) = (hit.texel[0] + dx, hit.texel[1] + dy);
-                        let c = field.texel_corners(i64::from(x), i64::from(y)).map(height);
-                        let (u0, v0, u1, v1) = (coord(x), coord(y), coord(x + 1), coord(y + 1));
-                        let corners = [
-                            [u0, v0, c[0]],
-                            [u1, v0, c[1]],
-                            [u1, v1, c[3]],
-                            [u0, v1, c[2]],
-                        ];
-                        for tri in [
-                            [corners[0], corners[1], corners[2]],
-                            [corners[0], corners[2], corners[3]],
-                        ] {
-                            let shell = ShellScene {
-                                p: prism.p.map(to_f64::<T>),
-                                n: prism.n.map(to_f64::<T>),
-                                uv: prism.uv.map(|t| [t.x().to_f64(), t.y().to_f64()]),
-                                origin: to_f64::<T>(ray.origin),
-                                dir: to_f64::<T>(ray.dir),
-                                tri,
-                            };
-                            if let Some(h) = true_microtriangle_hit(&shell, 0.0, 1.0, 0.0)
-                                && best.is_none_or(|b| h.t < b)
-                            {
-                                best = Some(h.t);
-                            }
-                        }
-                    }
-                }
-                best
-            };
-            // A hit on a base triangle's edge may be truly in the neighbouring prism (the
-            // tracer's prisms overlap there by a rounding bound): then the prisms sharing a
-            // vertex with the hit's, at the same texels, are searched too.
-            let mut best = nearest_in(hit.triangle as usize);
-            if best.is_none() {
-                let mesh = surface.mesh();
-                let corners = mesh.triangle(hit.triangle as usize);
-                for other in 0..mesh.triangle_count() {
-                    let shares = mesh.triangle(other).iter().any(|v| {
-                        corners.iter().any(|c| {
-                            to_f64::<T>(mesh.positions()[*c as usize])
-                                == to_f64::<T>(mesh.positions()[*v as usize])
-                        })
-                    });
-                    if other != hit.triangle as usize
-                        && shares
-                        && let Some(t) = nearest_in(other)
+            if let Some(h) = true_microtriangle_hit(&shell, 0.0, 1.0, t_min)
+                && best.is_none_or(|b| h.t < b)
+            {
+                best = Some(h.t);
+            }
+        }
+        best
+    }
+
+    /// The nearest true hit at `t >= t_min` on the 3 x 3 texels around `texel` in the prism
+    /// of `triangle`; where there is none (a hit on a base triangle's edge may be truly in the
+    /// neighbouring prism: the tracer's prisms overlap there by a rounding bound), in the
+    /// prisms sharing a vertex with it, at the same texels.
+    fn hit_around(
+        &self,
+        ray: &Ray<T>,
+        triangle: usize,
+        texel: [i32; 2],
+        t_min: f64,
+    ) -> Option<f64> {
+        let in_prism = |tri: usize| {
+            let mut best: Option<f64> = None;
+            for dy in -1..=1 {
+                for dx in -1..=1 {
+                    let t = self.texel_hit(ray, tri, [texel[0] + dx, texel[1] + dy], t_min);
+                    if let Some(t) = t
                         && best.is_none_or(|b| t < b)
                     {
                         best = Some(t);
                     }
                 }
             }
+            best
+        };
+        in_prism(triangle).or_else(|| {
+            self.neighbours[triangle]
+                .iter()
+                .filter_map(|&other| in_prism(other))
+                .min_by(f64::total_cmp)
+        })
+    }
+
+    /// How the tracer's hit at distance `t` on `texel` of `triangle` compares with the true
+    /// surface there (see [`GhostCount`]); the hit texel alone settles almost every hit.
+    fn judge(&self, ray: &Ray<T>, triangle: usize, texel: [i32; 2], t: f64) -> HitJudgement {
+        let t_min = t * (1.0 - LEAK_TOLERANCE);
+        let close = |truth: Option<f64>| truth.is_some_and(|x| x <= t * (1.0 + LEAK_TOLERANCE));
+        if close(self.texel_hit(ray, triangle, texel, t_min))
+            || close(self.hit_around(ray, triangle, texel, t_min))
+        {
+            return HitJudgement::Confirmed;
+        }
+        match self.hit_around(ray, triangle, texel, 0.0) {
+            Some(truth) if truth < t_min => HitJudgement::TooFar,
+            _ => HitJudgement::Ghost,
+        }
+    }
+}
+
+/// The oracle's verdict on one hit.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum HitJudgement {
+    Confirmed,
+    Ghost,
+    TooFar,
+}
+
+/// Which hits of a grid the oracle judges for [`GhostCount`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum JudgedHits {
+    /// Every hit (`nlrt watertight`; about 0.3 ms of one core per hit).
+    Every,
+    /// About this many, evenly spaced over the hits in grid order (the report).
+    Spaced(usize),
+}
+
+/// Hits of nonlinear tracing on the `n x n` grid judged by the oracle ([`GhostCount`]).
+fn ghost_count<T: Real>(
+    scene: &Scene,
+    truth: &TrueSurface<'_, T>,
+    n: usize,
+    which: JudgedHits,
+) -> GhostCount {
+    let hits: Vec<(usize, Ray<T>, nlrt_accel::SurfaceHit<T>)> = (0..n * n)
+        .into_par_iter()
+        .filter_map(|k| {
+            let ray = grid_ray::<T>(scene, n, k)?;
+            let hit = truth.surface.intersect(
+                &ray,
+                T::ZERO,
+                T::INFINITY,
+                &mut TraversalStats::default(),
+            )?;
+            Some((k, ray, hit))
+        })
+        .collect();
+    let stride = match which {
+        JudgedHits::Every => 1,
+        JudgedHits::Spaced(count) => hits.len().div_ceil(count.max(1)).max(1),
+    };
+    let judged: Vec<(u32, HitJudgement)> = hits
+        .par_iter()
+        .step_by(stride)
+        .map(|&(k, ray, hit)| {
             let t = hit.hit.t.to_f64();
-            best.map(|truth| (t - truth).abs() / truth.abs().max(f64::MIN_POSITIVE))
+            let verdict = truth.judge(&ray, hit.triangle as usize, hit.texel, t);
+            if verdict != HitJudgement::Confirmed && std::env::var_os("NLRT_SHOW_LEAKS").is_some() {
+                eprintln!(
+                    "{} {verdict:?} at grid cell ({}, {}): t = {t}, triangle {}, texel {:?}, true hit near it {:?}",
+                    T::NAME,
+                    k % n,
+                    k / n,
+                    hit.triangle,
+                    hit.texel,
+                    truth.hit_around(&ray, hit.triangle as usize, hit.texel, 0.0)
+                );
+            }
+            (k as u32, verdict)
+        })
+        .collect();
+    GhostCount {
+        hits: judged.len(),
+        ghosts: judged.iter().filter(|j| j.1 == HitJudgement::Ghost).count(),
+        too_far: judged
+            .iter()
+            .filter(|j| j.1 == HitJudgement::TooFar)
+            .count(),
+        ghost_cells: judged
+            .iter()
+            .filter(|j| j.1 == HitJudgement::Ghost)
+            .map(|j| j.0)
+            .collect(),
+    }
+}
+
+/// [`DistanceError`] over about [`DISTANCE_SAMPLES`] evenly spaced rays of the grid that hit.
+fn distance_error<T: Real>(scene: &Scene, truth: &TrueSurface<'_, T>, n: usize) -> DistanceError {
+    let hits: Vec<(Ray<T>, nlrt_accel::SurfaceHit<T>)> = (0..n * n)
+        .into_par_iter()
+        .filter_map(|k| {
+            let ray = grid_ray::<T>(scene, n, k)?;
+            let hit = truth.surface.intersect(
+                &ray,
+                T::ZERO,
+                T::INFINITY,
+                &mut TraversalStats::default(),
+            )?;
+            Some((ray, hit))
+        })
+        .collect();
+    let stride = hits.len().div_ceil(DISTANCE_SAMPLES).max(1);
+    let errors: Vec<Option<f64>> = hits
+        .par_iter()
+        .step_by(stride)
+        .map(|(ray, hit)| {
+            let t = hit.hit.t.to_f64();
+            truth
+                .hit_around(ray, hit.triangle as usize, hit.texel, 0.0)
+                .map(|truth| (t - truth).abs() / truth.abs().max(f64::MIN_POSITIVE))
         })
         .collect();
     let mut verified: Vec<f64> = errors.iter().flatten().copied().collect();
@@ -711,10 +884,11 @@ impl LeakReport {
     }
 }
 
-/// A leak image like the paper's Fig. 8: decided rays grey, leaks red, undecided black.
+/// A leak image like the paper's Fig. 8: decided rays grey, leaks red, ghost hits yellow,
+/// undecided black.
 #[must_use]
 pub fn leak_image(report: &LeakReport) -> Vec<u8> {
-    report
+    let mut rgb: Vec<u8> = report
         .verdicts
         .iter()
         .flat_map(|v| match v {
@@ -722,7 +896,12 @@ pub fn leak_image(report: &LeakReport) -> Vec<u8> {
             Verdict::Hit => [150, 150, 150],
             Verdict::Leak(_) => [255, 0, 0],
         })
-        .collect()
+        .collect();
+    for &cell in report.ghosts.iter().flat_map(|g| &g.ghost_cells) {
+        let i = 3 * cell as usize;
+        rgb[i..i + 3].copy_from_slice(&[255, 220, 0]);
+    }
+    rgb
 }
 
 #[cfg(test)]

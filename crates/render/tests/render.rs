@@ -490,7 +490,7 @@ fn watertight_with_an_unjudged_method_says_why() {
 /// method the report it gets alone, in the order asked for.
 #[test]
 fn measuring_methods_together_equals_measuring_them_alone() {
-    use nlrt_render::watertight::{measure, measure_all};
+    use nlrt_render::watertight::{JudgedHits, measure, measure_all};
     let scene = scenes::torus_scene(64);
     let methods = [
         Method::NonlinearF32,
@@ -498,17 +498,30 @@ fn measuring_methods_together_equals_measuring_them_alone() {
         Method::MarchingF32,
         Method::NonlinearF64,
     ];
-    let together = measure_all(&scene, 48, &methods).unwrap();
+    let together = measure_all(&scene, 48, &methods, JudgedHits::Every).unwrap();
     assert_eq!(together.len(), methods.len());
     for (report, &method) in together.iter().zip(&methods) {
         let alone = measure(&scene, 48, method).unwrap();
         assert_eq!(report.method, method);
         assert!(report.decided > 0);
         assert_eq!(
-            (report.decided, report.leaks, &report.verdicts),
-            (alone.decided, alone.leaks, &alone.verdicts),
+            (
+                report.decided,
+                report.leaks,
+                &report.verdicts,
+                &report.ghosts
+            ),
+            (alone.decided, alone.leaks, &alone.verdicts, &alone.ghosts),
             "{method}"
         );
     }
-    assert!(measure_all(&scene, 48, &[Method::NonlinearF32, Method::Tessellated]).is_err());
+    assert!(
+        measure_all(
+            &scene,
+            48,
+            &[Method::NonlinearF32, Method::Tessellated],
+            JudgedHits::Every
+        )
+        .is_err()
+    );
 }
