@@ -89,10 +89,11 @@ fn distance_cell(r: &watertight::LeakReport) -> String {
     })
 }
 
-/// Ghost hits and hits too far among every hit judged by the oracle, or `-`.
+/// Ghost hits, grazing near misses and hits too far among the hits judged by the oracle, or
+/// `-`.
 fn ghost_cell(r: &watertight::LeakReport) -> String {
-    r.ghosts.as_ref().map_or("- | -".into(), |g| {
-        format!("{} of {} | {}", g.ghosts, g.hits, g.too_far)
+    r.ghosts.as_ref().map_or("- | - | -".into(), |g| {
+        format!("{} of {} | {} | {}", g.ghosts, g.hits, g.grazing, g.too_far)
     })
 }
 
@@ -333,7 +334,7 @@ fn report_command(output: PathBuf, args: &RenderArgs, solver_samples: usize) -> 
     };
     eprintln!("watertightness...");
     let mut leaks_md = String::from(
-        "| scene | method | rays | decided | leaks | rate | 95% interval | ghost hits (of hits judged) | hits too far | hit distance vs oracle: median / p99 / max rel. error (hits compared, unverified) |\n|---|---|---|---|---|---|---|---|---|---|\n",
+        "| scene | method | rays | decided | leaks | rate | 95% interval | ghost hits (of hits judged) | grazing | too far | hit distance vs oracle: median / p99 / max rel. error (hits compared, unverified) |\n|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for name in scenes::WATERTIGHT_SCENES {
         let Some(scene) = scenes::builtin(name, args.scene_size.into()) else {
@@ -658,9 +659,9 @@ fn main() -> ExitCode {
                 );
             }
             println!(
-                "| scene | method | rays | decided | leaks | rate | 95% interval | ghost hits (of hits judged) | hits too far | hit distance vs oracle: median / p99 / max rel. error (hits compared, unverified) | seconds |"
+                "| scene | method | rays | decided | leaks | rate | 95% interval | ghost hits (of hits judged) | grazing | too far | hit distance vs oracle: median / p99 / max rel. error (hits compared, unverified) | seconds |"
             );
-            println!("|---|---|---|---|---|---|---|---|---|---|---|");
+            println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
             let methods: Vec<Method> = methods.collect();
             let judged_hits = ghost_samples.map_or(watertight::JudgedHits::Every, |n| {
                 watertight::JudgedHits::Spaced(usize::try_from(n).unwrap_or(usize::MAX))

@@ -16,8 +16,10 @@
 //! cracked there (Fig. 9's point-degenerate column has one by construction).
 //!
 //! This finds misses and hits beyond the base; a hit that is too far but still above the base
-//! is not detected (a lower bound on leaks). `NLRT_SHOW_LEAKS=1` prints each leak. Displacement scenes only: a shell-mapped object
-//! need not cover the base.
+//! is not detected by it (a lower bound on leaks). The other direction, hits in front of the
+//! true surface, is judged per hit by the MPFR oracle ([`GhostCount`], nonlinear tracing).
+//! `NLRT_SHOW_LEAKS=1` prints each leak and each hit the oracle does not confirm.
+//! Displacement scenes only: a shell-mapped object need not cover the base.
 
 use crate::method::Method;
 use crate::scenes::{Content, Scene};
@@ -107,15 +109,21 @@ pub struct DistanceError {
 /// Every reported hit of a grid judged against the oracle's true hits on the microtriangles
 /// around it (the hit texel and its 8 neighbours, in the neighbouring prisms too when the hit
 /// lies on a base edge; 512-bit MPFR on exactly the tracer's values). A hit is confirmed when
-/// a true hit lies within [`LEAK_TOLERANCE`] (relative) of its distance; otherwise it is a
-/// ghost when the nearest true hit there is farther or absent (the tracer reports a surface in
-/// front of the true one), and too far when it is nearer (the tracer passed the surface).
+/// a true hit lies within [`LEAK_TOLERANCE`] (relative) of its distance. Otherwise it is too
+/// far when a nearer true hit is there (the tracer passed the surface); when the nearest true
+/// hit there is farther or absent, it is grazing if the point the tracer reports lies on the
+/// true surface within the tolerance (the exact ray passes that close to the surface without
+/// touching it, at a silhouette: conservative rounding, which is what keeps the tracer from
+/// leaking, turns such a near miss into a hit) and a ghost if not (a surface reported where
+/// there is none).
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct GhostCount {
     /// Hits judged (every ray of the grid that hit).
     pub hits: usize,
-    /// Hits in front of the true surface (or where it has none).
+    /// Hits where the true surface is not: in front of it, or where it has none.
     pub ghosts: usize,
+    /// Near misses reported as hits, on the true surface within the tolerance.
+    pub grazing: usize,
     /// Hits beyond a nearer true hit of the same neighbourhood.
     pub too_far: usize,
     /// Grid cells (row-major) of the ghost hits, for the leak image.
@@ -734,9 +742,10 @@ impl<'a, T: Real> TrueSurface<'a, T> {
         })
     }
 
-    /// How the tracer's hit at distance `t` on `texel` of `triangle` compares with the true
-    /// surface there (see [`GhostCount`]); the hit texel alone settles almost every hit.
-    fn judge(&self, ray: &Ray<T>, triangle: usize, texel: [i32; 2], t: f64) -> HitJudgement {
+    /// How the tracer's hit compares with the true surface there (see [`GhostCount`]); the
+    /// hit texel alone settles almost every hit.
+    fn judge(&self, ray: &Ray<T>, hit: &nlrt_accel::SurfaceHit<T>) -> HitJudgement {
+        let (triangle, texel, t) = (hit.triangle as usize, hit.texel, hit.hit.t.to_f64());
         let t_min = t * (1.0 - LEAK_TOLERANCE);
         let close = |truth: Option<f64>| truth.is_some_and(|x| x <= t * (1.0 + LEAK_TOLERANCE));
         if close(self.texel_hit(ray, triangle, texel, t_min))
@@ -746,8 +755,62 @@ impl<'a, T: Real> TrueSurface<'a, T> {
         }
         match self.hit_around(ray, triangle, texel, 0.0) {
             Some(truth) if truth < t_min => HitJudgement::TooFar,
+            _ if self.on_surface(ray, hit) => HitJudgement::Grazing,
             _ => HitJudgement::Ghost,
         }
+    }
+
+    /// Whether the point the tracer reports lies on the true surface, within
+    /// [`LEAK_TOLERANCE`]: its canonical coordinates `(alpha, beta)` in the base triangle and
+    /// `h` in `[0, 1]`, its height that of the microtriangles at its texture coordinates
+    /// (heights are in units of the height scale), and its shell point (Eq. 1) on the ray, within
+    /// the tolerance times the distance. Evaluated in f64 on the tracer's values, whose
+    /// rounding (1e-16 relative) is far below the tolerance.
+    fn on_surface(&self, ray: &Ray<T>, hit: &nlrt_accel::SurfaceHit<T>) -> bool {
+        let tol = LEAK_TOLERANCE;
+        let prism = self.surface.prism(hit.triangle as usize);
+        let (a, b, h) = (
+            hit.hit.alpha.to_f64(),
+            hit.hit.beta.to_f64(),
+            hit.hit.h.to_f64(),
+        );
+        let weights = [1.0 - a - b, a, b];
+        if weights.iter().any(|&w| w < -tol) || !(-tol..=1.0 + tol).contains(&h) {
+            return false;
+        }
+        let v3 = |v: T::Vec3| DVec3::from(to_f64::<T>(v));
+        let point: DVec3 = (0..3)
+            .map(|k| (v3(prism.p[k]) + v3(prism.n[k]) * h) * weights[k])
+            .sum();
+        let t = hit.hit.t.to_f64();
+        let on_ray = v3(ray.origin) + v3(ray.dir) * t;
+        if (point - on_ray).length() > tol * t * v3(ray.dir).length() {
+            return false;
+        }
+        let field = self.surface.field();
+        let side = field.side() as f64;
+        let (u, v) = (0..3).fold((0.0, 0.0), |(u, v), k| {
+            let uv = prism.uv[k];
+            (
+                u + uv.x().to_f64() * weights[k],
+                v + uv.y().to_f64() * weights[k],
+            )
+        });
+        let (x, y) = (u * side, v * side);
+        let (tx, ty) = (x.floor(), y.floor());
+        let (fx, fy) = (x - tx, y - ty);
+        let unit = f64::from(nlrt_accel::HEIGHT_ONE);
+        let c = field
+            .texel_corners(tx as i64, ty as i64)
+            .map(|s| f64::from(s) / unit);
+        // The texel's two microtriangles share the diagonal from its (0, 0) to its (1, 1)
+        // corner (corners in the order (0, 0), (1, 0), (0, 1), (1, 1)).
+        let surface_height = if fx >= fy {
+            c[0] + fx * (c[1] - c[0]) + fy * (c[3] - c[1])
+        } else {
+            c[0] + fy * (c[2] - c[0]) + fx * (c[3] - c[2])
+        };
+        (h - surface_height).abs() <= tol
     }
 }
 
@@ -755,6 +818,7 @@ impl<'a, T: Real> TrueSurface<'a, T> {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum HitJudgement {
     Confirmed,
+    Grazing,
     Ghost,
     TooFar,
 }
@@ -797,7 +861,7 @@ fn ghost_count<T: Real>(
         .step_by(stride)
         .map(|&(k, ray, hit)| {
             let t = hit.hit.t.to_f64();
-            let verdict = truth.judge(&ray, hit.triangle as usize, hit.texel, t);
+            let verdict = truth.judge(&ray, &hit);
             if verdict != HitJudgement::Confirmed && std::env::var_os("NLRT_SHOW_LEAKS").is_some() {
                 eprintln!(
                     "{} {verdict:?} at grid cell ({}, {}): t = {t}, triangle {}, texel {:?}, true hit near it {:?}",
@@ -815,6 +879,10 @@ fn ghost_count<T: Real>(
     GhostCount {
         hits: judged.len(),
         ghosts: judged.iter().filter(|j| j.1 == HitJudgement::Ghost).count(),
+        grazing: judged
+            .iter()
+            .filter(|j| j.1 == HitJudgement::Grazing)
+            .count(),
         too_far: judged
             .iter()
             .filter(|j| j.1 == HitJudgement::TooFar)
