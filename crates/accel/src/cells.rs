@@ -231,8 +231,23 @@ pub(crate) fn traverse_curve_cells<T: Real>(
         let hi = [T::from_f64((cx0 + k) as f64), T::from_f64((cy0 + k) as f64)];
         uv_tri.meets_square(lo, hi)
     };
-    // Sorted insertion, nearest first (few entries); false when full.
+    // Sorted insertion, nearest first (few entries); false when full. A piece for a child
+    // that already has one from the same stretch is merged into it (the hull of their
+    // heights: a superset, which the leaf test allows). Without the merge a curve within
+    // rounding of the split lines at every level (a ray grazing a long texel row, whose uv
+    // errors are then large) sends two pieces to each child per level, and their number
+    // doubles with depth; with it a node holds one stretch per stretch of its parent, so a
+    // walk visits each node at most once per root stretch.
     let insert = |found: &mut [Stretch<T>], n: &mut usize, s: Stretch<T>| -> bool {
+        let mut s = s;
+        if let Some(j) = found[..*n]
+            .iter()
+            .position(|f| (f.level, f.x, f.y) == (s.level, s.x, s.y))
+        {
+            s.h = [found[j].h[0].min(s.h[0]), found[j].h[1].max(s.h[1])];
+            found.copy_within(j + 1..*n, j);
+            *n -= 1;
+        }
         if *n == found.len() {
             return false;
         }
