@@ -226,14 +226,12 @@ fn check_traversal_hit<T: Real>(h: &nlrt_shellmap::Hit<T>, context: &dyn core::f
 /// Texel (or tile) ranges up to this many cells are also tested by brute force.
 const BRUTE_FORCE_CELLS: i64 = 4096;
 
-/// The displacement traversal target: a small height map (side 2 to 16, any samples, either
-/// wrap mode, tiling 1 to 4), one base triangle and a ray, all from raw bytes. No panic; a hit
-/// is finite, in `[0, inf)`, with `h` in `[0, 1]` and `(alpha, beta)` in the base triangle;
-/// and the accelerated hit is never nearer than the brute-force one (the traversal tests a
-/// subset of the same texels with the same arithmetic), checked when the texel range is small.
-pub fn fuzz_displacement<T: Real>(data: &[u8]) {
-    use nlrt_accel::{DisplacedSurface, HeightField, TraversalStats, Wrap};
-    use nlrt_baselines::{AffineTracing, ConeTraced, Marching};
+/// The surface and ray of a [`fuzz_displacement`] input, or `None` where set-up rejects it.
+#[must_use]
+pub fn displacement_case<T: Real>(
+    data: &[u8],
+) -> Option<(nlrt_accel::DisplacedSurface<T>, nlrt_shellmap::Ray<T>)> {
+    use nlrt_accel::{DisplacedSurface, HeightField, Wrap};
     let header = data.first().copied().unwrap_or(0);
     let side = 2usize << (header & 3);
     let wrap = if header & 4 == 0 {
@@ -252,10 +250,20 @@ pub fn fuzz_displacement<T: Real>(data: &[u8]) {
     let field = HeightField::new(side, samples, wrap).expect("valid side");
     let rest = data.get(1 + 2 * side * side..).unwrap_or(&[]);
     let x = decode::<T, 30>(rest).coeffs;
-    let Some((mesh, ray)) = base_and_ray(&x) else {
-        return;
-    };
-    let Ok(surface) = DisplacedSurface::new(mesh, field, T::ONE, tiling) else {
+    let (mesh, ray) = base_and_ray(&x)?;
+    let surface = DisplacedSurface::new(mesh, field, T::ONE, tiling).ok()?;
+    Some((surface, ray))
+}
+
+/// The displacement traversal target: a small height map (side 2 to 16, any samples, either
+/// wrap mode, tiling 1 to 4), one base triangle and a ray, all from raw bytes. No panic; a hit
+/// is finite, in `[0, inf)`, with `h` in `[0, 1]` and `(alpha, beta)` in the base triangle;
+/// and the accelerated hit is never nearer than the brute-force one (the traversal tests a
+/// subset of the same texels with the same arithmetic), checked when the texel range is small.
+pub fn fuzz_displacement<T: Real>(data: &[u8]) {
+    use nlrt_accel::TraversalStats;
+    use nlrt_baselines::{AffineTracing, ConeTraced, Marching};
+    let Some((surface, ray)) = displacement_case::<T>(data) else {
         return;
     };
     let fast = surface.intersect(&ray, T::ZERO, T::INFINITY, &mut TraversalStats::default());
@@ -355,6 +363,73 @@ pub fn fuzz_shell<T: Real>(data: &[u8]) {
         assert!(
             h.t >= brute.hit.t,
             "accelerated {hit:?} nearer than brute force {brute:?}"
+        );
+    }
+}
+
+/// Height-map side the scene-file target accepts: a 256^2 map of 16-bit samples is 128 KiB,
+/// so no input makes the loader allocate more than a few MiB (the decoders' buffers are of
+/// the same order), whatever its header claims.
+pub const FUZZ_MAX_MAP_SIDE: usize = 256;
+
+/// The scene-file loader target: the bytes are the TOML text, a 0 byte, the base mesh's OBJ
+/// text, a 0 byte, and the rest the third file the TOML names (the height map, PNG or EXR by
+/// the name's extension, or the shell object's OBJ); the files are handed out in the order
+/// the loader asks for them, whatever their names. No panic, an error message that names a
+/// file, maps larger than [`FUZZ_MAX_MAP_SIDE`] refused from their header; a scene that loads
+/// is built for nonlinear tracing in each precision it passes the precision check for and
+/// renders a 4 x 4 image with one bounce, every pixel finite.
+pub fn fuzz_scene_file(data: &[u8]) {
+    use nlrt_render::integrator::{RenderOptions, render};
+    use nlrt_render::scene_file::{Source, load_from};
+    use nlrt_render::tracers::Nonlinear;
+    use std::cell::Cell;
+    use std::path::Path;
+    let mut parts = data.splitn(3, |&b| b == 0);
+    let files: Vec<&[u8]> = (0..3).map(|_| parts.next().unwrap_or(&[])).collect();
+    let next = Cell::new(0usize);
+    let read = |_: &Path| {
+        let i = next.get();
+        next.set(i + 1);
+        files
+            .get(i)
+            .map(|f| f.to_vec())
+            .ok_or_else(|| "fuzz input: no more files".to_string())
+    };
+    let source = Source {
+        read: &read,
+        max_map_side: FUZZ_MAX_MAP_SIDE,
+    };
+    let scene = match load_from(Path::new("fuzz/scene.toml"), &source) {
+        Ok(scene) => scene,
+        Err(message) => {
+            assert!(
+                message.starts_with("fuzz/"),
+                "an error names its file: {message}"
+            );
+            return;
+        }
+    };
+    let opts = RenderOptions {
+        width: 4,
+        height: 4,
+        spp: 1,
+        bounces: 1,
+    };
+    let frames = [
+        scene
+            .check_precision::<f64>()
+            .is_ok()
+            .then(|| render(&scene, &Nonlinear::<f64>::new(&scene), &opts, &|_| {})),
+        scene
+            .check_precision::<f32>()
+            .is_ok()
+            .then(|| render(&scene, &Nonlinear::<f32>::new(&scene), &opts, &|_| {})),
+    ];
+    for frame in frames.iter().flatten() {
+        assert!(
+            frame.color.iter().flatten().all(|c| c.is_finite()),
+            "non-finite pixel"
         );
     }
 }

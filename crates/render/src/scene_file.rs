@@ -94,6 +94,17 @@ fn default_sun() -> [f64; 3] {
     [0.3, 0.8, 0.5]
 }
 
+/// Where a scene file's text and the files it names come from, and how large a height map
+/// may be.
+pub struct Source<'a> {
+    /// The bytes of a file, given its path (the scene file's own, or one it names joined to
+    /// the scene file's directory), or the message saying why it cannot be read.
+    pub read: &'a dyn Fn(&Path) -> Result<Vec<u8>, String>,
+    /// The largest height-map side accepted, checked from the map's header before its
+    /// samples are allocated ([`MAX_MAP_SIDE`] for files).
+    pub max_map_side: usize,
+}
+
 /// Loads a scene file.
 ///
 /// # Errors
@@ -103,8 +114,26 @@ fn default_sun() -> [f64; 3] {
 /// not a grayscale 8/16-bit PNG or not square with a power-of-two side; an object outside the
 /// unit tile.
 pub fn load(path: &Path) -> Result<Scene, String> {
-    let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
-    let file: File = toml::from_str(&text).map_err(|e| {
+    let read = |p: &Path| std::fs::read(p).map_err(|e| format!("{}: {e}", p.display()));
+    load_from(
+        path,
+        &Source {
+            read: &read,
+            max_map_side: MAX_MAP_SIDE,
+        },
+    )
+}
+
+/// [`load`] with the scene file and the files it names read from `source` (the fuzz target
+/// feeds them from memory).
+///
+/// # Errors
+/// As [`load`].
+pub fn load_from(path: &Path, source: &Source<'_>) -> Result<Scene, String> {
+    let bytes = (source.read)(path)?;
+    let text = std::str::from_utf8(&bytes)
+        .map_err(|e| format!("{}: not UTF-8 text: {e}", path.display()))?;
+    let file: File = toml::from_str(text).map_err(|e| {
         let line = e
             .span()
             .map(|s| format!(" line {}", text[..s.start].matches('\n').count() + 1))
@@ -112,7 +141,7 @@ pub fn load(path: &Path) -> Result<Scene, String> {
         format!("{}{line}: {}", path.display(), e.message())
     })?;
     let dir = path.parent().unwrap_or(Path::new("."));
-    let (positions, normals, uvs, triangles) = load_obj(&dir.join(&file.mesh.obj), true)?;
+    let (positions, normals, uvs, triangles) = load_obj(&dir.join(&file.mesh.obj), source, true)?;
     let check = |what: &str, v: f64, ok: bool| {
         if ok {
             Ok(())
@@ -132,7 +161,7 @@ pub fn load(path: &Path) -> Result<Scene, String> {
                 d.tiling,
                 d.tiling.is_finite() && d.tiling > 0.0 && d.tiling <= 1e6,
             )?;
-            let field = load_height_map(&dir.join(&d.height_map))?;
+            let field = load_height_map(&dir.join(&d.height_map), source)?;
             (Content::Displacement(field), d.height_scale, d.tiling)
         }
         (None, Some(s)) => {
@@ -147,7 +176,7 @@ pub fn load(path: &Path) -> Result<Scene, String> {
                 s.tiling.is_finite() && s.tiling > 0.0 && s.tiling <= 1e6,
             )?;
             let object_path = dir.join(&s.object);
-            let (p, _, _, t) = load_obj(&object_path, false)?;
+            let (p, _, _, t) = load_obj(&object_path, source, false)?;
             let object: Vec<[DVec3; 3]> = t.iter().map(|t| t.map(|i| p[i as usize])).collect();
             if let Some(bad) = object
                 .iter()
@@ -234,14 +263,17 @@ type ObjData = (Vec<DVec3>, Vec<DVec3>, Vec<DVec2>, Vec<[u32; 3]>);
 
 /// An OBJ as one mesh (all models merged). With `base`, texture coordinates are required and
 /// normals computed (area-weighted) when absent.
-fn load_obj(path: &Path, base: bool) -> Result<ObjData, String> {
+fn load_obj(path: &Path, source: &Source<'_>, base: bool) -> Result<ObjData, String> {
     let options = tobj::LoadOptions {
         triangulate: true,
         single_index: true,
         ..Default::default()
     };
+    let bytes = (source.read)(path)?;
+    // Material libraries are not read: the scene file gives the material.
     let (models, _) =
-        tobj::load_obj(path, &options).map_err(|e| format!("{}: {e}", path.display()))?;
+        tobj::load_obj_buf(&mut bytes.as_slice(), &options, |_| Ok(Default::default()))
+            .map_err(|e| format!("{}: {e}", path.display()))?;
     let (mut p, mut n, mut uv, mut t) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
     for m in &models {
         let mesh = &m.mesh;
@@ -336,33 +368,38 @@ fn load_obj(path: &Path, base: bool) -> Result<ObjData, String> {
 /// from the file's header, before anything is allocated.
 pub const MAX_MAP_SIDE: usize = 16_384;
 
-/// Whether a `w x h` map fits [`MAX_MAP_SIDE`], with the message that says why not.
-fn check_map_size(w: usize, h: usize) -> Result<(), String> {
-    if w > MAX_MAP_SIDE || h > MAX_MAP_SIDE {
+/// Whether a `w x h` map fits `max_side`, with the message that says why not.
+fn check_map_size(w: usize, h: usize, max_side: usize) -> Result<(), String> {
+    if w > max_side || h > max_side {
         return Err(format!(
-            "height map is {w} x {h}; the largest side a scene file may use is {MAX_MAP_SIDE}"
+            "height map is {w} x {h}; the largest side a scene file may use is {max_side}"
         ));
     }
     Ok(())
 }
 
 /// A grayscale PNG (8 or 16 bits), or an OpenEXR file (by its extension), as a height field.
-fn load_height_map(path: &Path) -> Result<HeightField, String> {
+fn load_height_map(path: &Path, source: &Source<'_>) -> Result<HeightField, String> {
     let err = |m: String| format!("{}: {m}", path.display());
+    let bytes = (source.read)(path)?;
     if path
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("exr"))
     {
-        return load_exr_height_map(path);
+        return load_exr_height_map(path, &bytes, source.max_map_side);
     }
-    let file = std::fs::File::open(path).map_err(|e| err(e.to_string()))?;
-    let mut decoder = png::Decoder::new(std::io::BufReader::new(file));
+    let mut decoder = png::Decoder::new(std::io::Cursor::new(bytes.as_slice()));
     decoder.set_transformations(png::Transformations::IDENTITY);
     let mut reader = decoder
         .read_info()
         .map_err(|e| err(format!("not a readable PNG: {e}")))?;
     let header = reader.info();
-    check_map_size(header.width as usize, header.height as usize).map_err(err)?;
+    check_map_size(
+        header.width as usize,
+        header.height as usize,
+        source.max_map_side,
+    )
+    .map_err(err)?;
     let mut buf = vec![
         0;
         reader
@@ -406,15 +443,15 @@ fn load_height_map(path: &Path) -> Result<HeightField, String> {
 /// An OpenEXR height map: one channel (`Y`, else `R`, else the only one) of heights in
 /// `[0, 1]`, quantised to the 16-bit samples the height field stores (the nearest of 65,536
 /// levels: a relative step of 1.5e-5 of the height scale).
-fn load_exr_height_map(path: &Path) -> Result<HeightField, String> {
+fn load_exr_height_map(path: &Path, bytes: &[u8], max_side: usize) -> Result<HeightField, String> {
     use exr::prelude::*;
     let err = |m: String| format!("{}: {m}", path.display());
     // The header first: a small file may claim any size, and reading it would allocate that.
-    let meta = exr::meta::MetaData::read_from_file(path, false)
+    let meta = exr::meta::MetaData::read_from_buffered(std::io::Cursor::new(bytes), false)
         .map_err(|e| err(format!("not a readable OpenEXR file: {e}")))?;
     for header in &meta.headers {
         let size = header.layer_size;
-        check_map_size(size.width(), size.height()).map_err(err)?;
+        check_map_size(size.width(), size.height(), max_side).map_err(err)?;
     }
     let image = read()
         .no_deep_data()
@@ -422,7 +459,7 @@ fn load_exr_height_map(path: &Path) -> Result<HeightField, String> {
         .all_channels()
         .first_valid_layer()
         .all_attributes()
-        .from_file(path)
+        .from_buffered(std::io::Cursor::new(bytes))
         .map_err(|e| err(format!("not a readable OpenEXR file: {e}")))?;
     let layer = &image.layer_data;
     let (w, h) = (layer.size.width(), layer.size.height());
