@@ -3,4 +3,6 @@
 #![no_main]
 use libfuzzer_sys::fuzz_target;
 
-fuzz_target!(|data: &[u8]| nlrt_tests::fuzz_input::fuzz_scene_file(data));
+fuzz_target!(|data: &[u8]| {
+    nlrt_tests::fuzz_input::fuzz_scene_file(data);
+});

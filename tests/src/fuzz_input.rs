@@ -375,26 +375,27 @@ pub const FUZZ_MAX_MAP_SIDE: usize = 256;
 /// The scene-file loader target: the bytes are the TOML text, a 0 byte, the base mesh's OBJ
 /// text, a 0 byte, and the rest the third file the TOML names (the height map, PNG or EXR by
 /// the name's extension, or the shell object's OBJ); the files are handed out in the order
-/// the loader asks for them, whatever their names. No panic, an error message that names a
-/// file, maps larger than [`FUZZ_MAX_MAP_SIDE`] refused from their header; a scene that loads
+/// the loader asks for them, whatever their names. No panic, an error message that begins
+/// with the path of a file the loader read, maps larger than [`FUZZ_MAX_MAP_SIDE`] refused from their header; a scene that loads
 /// is built for nonlinear tracing in each precision it passes the precision check for and
-/// renders a 4 x 4 image with one bounce, every pixel finite.
-pub fn fuzz_scene_file(data: &[u8]) {
+/// renders a 4 x 4 image with one bounce, every pixel finite. Returns whether it loaded.
+pub fn fuzz_scene_file(data: &[u8]) -> bool {
     use nlrt_render::integrator::{RenderOptions, render};
     use nlrt_render::scene_file::{Source, load_from};
     use nlrt_render::tracers::Nonlinear;
-    use std::cell::Cell;
+    use std::cell::RefCell;
     use std::path::Path;
     let mut parts = data.splitn(3, |&b| b == 0);
     let files: Vec<&[u8]> = (0..3).map(|_| parts.next().unwrap_or(&[])).collect();
-    let next = Cell::new(0usize);
-    let read = |_: &Path| {
-        let i = next.get();
-        next.set(i + 1);
+    let asked: RefCell<Vec<String>> = RefCell::new(Vec::new());
+    let read = |path: &Path| {
+        let mut asked = asked.borrow_mut();
+        let i = asked.len();
+        asked.push(path.display().to_string());
         files
             .get(i)
             .map(|f| f.to_vec())
-            .ok_or_else(|| "fuzz input: no more files".to_string())
+            .ok_or_else(|| format!("{}: fuzz input has no more files", path.display()))
     };
     let source = Source {
         read: &read,
@@ -404,10 +405,13 @@ pub fn fuzz_scene_file(data: &[u8]) {
         Ok(scene) => scene,
         Err(message) => {
             assert!(
-                message.starts_with("fuzz/"),
-                "an error names its file: {message}"
+                asked
+                    .borrow()
+                    .iter()
+                    .any(|p| message.starts_with(p.as_str())),
+                "an error names the file it is about: {message}"
             );
-            return;
+            return false;
         }
     };
     let opts = RenderOptions {
@@ -432,4 +436,5 @@ pub fn fuzz_scene_file(data: &[u8]) {
             "non-finite pixel"
         );
     }
+    true
 }

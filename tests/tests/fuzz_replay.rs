@@ -133,3 +133,81 @@ fn replay_shell_f32() {
 fn replay_shell_f64() {
     replay("shell_f64", nlrt_tests::fuzz_input::fuzz_shell::<f64>);
 }
+
+#[test]
+fn replay_scene_file() {
+    replay("scene_file", |data| {
+        nlrt_tests::fuzz_input::fuzz_scene_file(data);
+    });
+}
+
+/// The seeds are valid scenes (so the fuzzer starts from inputs that reach the renderer).
+#[test]
+fn scene_file_seeds_load() {
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../fuzz/corpus/scene_file");
+    for name in ["seed-png16", "seed-exr", "seed-png8", "seed-shell"] {
+        let data = std::fs::read(dir.join(name)).expect("committed seed");
+        assert!(nlrt_tests::fuzz_input::fuzz_scene_file(&data), "{name}");
+    }
+}
+
+/// Writes the scene-file target's seeds (run once by hand:
+/// `cargo test -p nlrt-tests --test fuzz_replay -- --ignored write_scene_file_seeds`): the
+/// example scene with its PNG map, with the map as an 8 x 8 EXR, with an 8-bit 4 x 4 PNG,
+/// and a shell-mapped quad; each as TOML, 0, base OBJ, 0, third file.
+#[test]
+#[ignore]
+fn write_scene_file_seeds() {
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..");
+    let dir = root.join("fuzz/corpus/scene_file");
+    std::fs::create_dir_all(&dir).unwrap();
+    let toml = std::fs::read_to_string(root.join("scenes/bumps.toml")).unwrap();
+    let obj = std::fs::read(root.join("scenes/quad.obj")).unwrap();
+    let seed = |name: &str, toml: &str, third: &[u8]| {
+        let mut bytes = toml.as_bytes().to_vec();
+        bytes.push(0);
+        bytes.extend_from_slice(&obj);
+        bytes.push(0);
+        bytes.extend_from_slice(third);
+        std::fs::write(dir.join(name), bytes).unwrap();
+    };
+    seed(
+        "seed-png16",
+        &toml,
+        &std::fs::read(root.join("scenes/bumps.png")).unwrap(),
+    );
+    // An 8 x 8 EXR of heights, channel Y.
+    let exr_path = std::env::temp_dir().join("nlrt-seed.exr");
+    {
+        use exr::prelude::*;
+        let channels = SpecificChannels::build()
+            .with_channel("Y")
+            .with_pixel_fn(|p: Vec2<usize>| (((p.x() * 7 + p.y() * 3) % 8) as f32 / 8.0,));
+        Image::from_channels((8, 8), channels)
+            .write()
+            .to_file(&exr_path)
+            .unwrap();
+    }
+    seed(
+        "seed-exr",
+        &toml.replace("\"bumps.png\"", "\"bumps.exr\""),
+        &std::fs::read(&exr_path).unwrap(),
+    );
+    // A 4 x 4 8-bit grayscale PNG.
+    let mut png_bytes = Vec::new();
+    {
+        let mut encoder = png::Encoder::new(&mut png_bytes, 4, 4);
+        encoder.set_color(png::ColorType::Grayscale);
+        encoder.set_depth(png::BitDepth::Eight);
+        let mut writer = encoder.write_header().unwrap();
+        let data: Vec<u8> = (0..16).map(|i| (i * 16) as u8).collect();
+        writer.write_image_data(&data).unwrap();
+    }
+    seed("seed-png8", &toml, &png_bytes);
+    let shell = "[mesh]\nobj = \"quad.obj\"\n[shell]\nobject = \"tile.obj\"\nheight_scale = 0.3\ntiling = 2.0\n[camera]\neye = [0.0, 1.6, 2.2]\ntarget = [0.0, 0.0, 0.0]\n";
+    seed(
+        "seed-shell",
+        shell,
+        b"v 0.1 0.1 0.2\nv 0.9 0.1 0.5\nv 0.5 0.9 0.9\nf 1 2 3\n",
+    );
+}

@@ -196,9 +196,10 @@ enum Command {
     /// must have hit the displaced surface) but were not hit; and ghost hits of nonlinear
     /// tracing: hits in front of the true surface, judged by the MPFR oracle.
     Watertight {
-        /// Displacement scene: torus, fur, mountain, mountain-grazing, fig9-displaced (or
-        /// cylinder, whose open ends make only part of its rays decidable), or a scene file
-        /// (`*.toml`) with a height map.
+        /// Displacement scene: torus, fur, mountain, mountain-grazing, fig9-displaced, the
+        /// ghost-hit tori torus-spikes, torus-tilted, torus-twisted (or cylinder, whose open
+        /// ends make only part of its rays decidable), or a scene file (`*.toml`) with a
+        /// height map.
         scene: String,
         /// Rays: a square grid of camera rays with at least this many.
         #[arg(long, default_value_t = 65_536, value_parser = clap::value_parser!(u64).range(1..=100_000_000))]
@@ -588,15 +589,17 @@ fn main() -> ExitCode {
                 }
             } else {
                 let known = SCENE_NAMES.contains(&scene.as_str())
-                    || scenes::WATERTIGHT_SCENES.contains(&scene.as_str());
+                    || scenes::WATERTIGHT_SCENES.contains(&scene.as_str())
+                    || scenes::GHOST_SCENES.contains(&scene.as_str());
                 match scenes::builtin(&scene, scene_size.into()).filter(|_| known) {
                     Some(s) => s,
                     None => {
                         return fail(
                             "watertight",
                             format!(
-                                "unknown scene '{scene}' (scenes: {}, or a scene file *.toml)",
-                                scenes::WATERTIGHT_SCENES.join(", ")
+                                "unknown scene '{scene}' (scenes: {}, {}, or a scene file *.toml)",
+                                scenes::WATERTIGHT_SCENES.join(", "),
+                                scenes::GHOST_SCENES.join(", ")
                             ),
                         );
                     }

@@ -92,18 +92,19 @@ pub const SCENE_NAMES: [&str; 9] = [
     "mountain", "cylinder", "fur", "torus", "feathers", "scales", "cornell", "highpoly", "fig9",
 ];
 
-/// Scenes `nlrt watertight` measures by default (displacement scenes whose rays can be
-/// decided: closed meshes, or the mountain's convex shell).
-pub const WATERTIGHT_SCENES: [&str; 8] = [
+/// Scenes whose rays `nlrt watertight` can decide (displacement scenes: closed meshes, or the
+/// mountain's convex shell) and the report measures.
+pub const WATERTIGHT_SCENES: [&str; 5] = [
     "torus",
     "fur",
     "mountain",
     "mountain-grazing",
     "fig9-displaced",
-    "torus-spikes",
-    "torus-tilted",
-    "torus-twisted",
 ];
+
+/// The ghost-hit tori ([`ghost_torus`]): judged by `nlrt watertight`, not by the report
+/// (their figures are in `docs/watertightness.md`).
+pub const GHOST_SCENES: [&str; 3] = ["torus-spikes", "torus-tilted", "torus-twisted"];
 
 /// Built-in scene variants made for one measurement, not part of the default report's
 /// renders: `mountain-grazing` (the mountain seen at grazing angles), `fig9-displaced` (Fig.

@@ -977,6 +977,40 @@ mod tests {
     use super::*;
     use crate::scenes::{Size, builtin};
 
+    /// The judge confirms the tracer's hits, and calls the same hits moved 1% nearer ghosts
+    /// and 1% farther too far (the surface is not there; a nearer one is).
+    #[test]
+    fn the_oracle_judges_moved_hits() {
+        let scene = crate::scenes::torus_scene(64);
+        let tracer = Nonlinear::<f64>::new(&scene);
+        let Nonlinear::Displaced(surface) = &tracer else {
+            unreachable!("displacement scene")
+        };
+        let truth = TrueSurface::new(surface);
+        let n = 16;
+        let mut judged = 0;
+        for k in 0..n * n {
+            let Some(ray) = grid_ray::<f64>(&scene, n, k) else {
+                continue;
+            };
+            let Some(hit) =
+                surface.intersect(&ray, 0.0, f64::INFINITY, &mut TraversalStats::default())
+            else {
+                continue;
+            };
+            assert_eq!(truth.judge(&ray, &hit), HitJudgement::Confirmed, "{hit:?}");
+            let moved = |factor: f64| {
+                let mut h = hit;
+                h.hit.t *= factor;
+                h
+            };
+            assert_eq!(truth.judge(&ray, &moved(0.99)), HitJudgement::Ghost);
+            assert_eq!(truth.judge(&ray, &moved(1.01)), HitJudgement::TooFar);
+            judged += 1;
+        }
+        assert!(judged > 50, "{judged}");
+    }
+
     #[test]
     fn criteria_follow_the_mesh_and_the_map() {
         let all = |name: &str| criteria(&builtin(name, Size::Small).unwrap());

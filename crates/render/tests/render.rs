@@ -525,3 +525,35 @@ fn measuring_methods_together_equals_measuring_them_alone() {
         .is_err()
     );
 }
+
+/// The ghost-hit tori (self-intersecting prisms under single-texel spikes, tilted normals
+/// under a checkerboard, twisted uvs with a tall shell), 64 x 64 rays: no leaks in either
+/// precision, and in f64 every hit confirmed by the oracle. f32 is not yet free of ghost hits
+/// on them (measured at 262,144 rays, docs/watertightness.md: 0.004% to 0.04% of hits, all at
+/// base-triangle edges where the ray runs nearly parallel to the prism's layers); this bounds
+/// that known failure at 0.1% of hits so that it cannot grow unnoticed.
+#[test]
+fn ghost_tori_hits_are_judged_by_the_oracle() {
+    use nlrt_render::watertight::measure;
+    for name in scenes::GHOST_SCENES {
+        let scene = scenes::builtin(name, scenes::Size::Small).unwrap();
+        for method in [Method::NonlinearF64, Method::NonlinearF32] {
+            let report = measure(&scene, 64, method).unwrap();
+            let g = report.ghosts.clone().expect("nonlinear hits are judged");
+            assert!(
+                report.decided > 1000 && g.hits > 2000,
+                "{name} {method}: {g:?}"
+            );
+            assert_eq!(report.leaks, 0, "{name} {method}");
+            if method == Method::NonlinearF64 {
+                assert_eq!(
+                    (g.ghosts, g.grazing, g.too_far),
+                    (0, 0, 0),
+                    "{name} {method}"
+                );
+            } else {
+                assert!(g.ghosts * 1000 <= g.hits, "{name} {method}: {g:?}");
+            }
+        }
+    }
+}
