@@ -670,8 +670,9 @@ pub fn torus_scene(side: usize) -> Scene {
 /// (whole tiles at the seam), an fBm map and a height scale 0.6, 1.5 times the tube radius.
 #[must_use]
 pub fn ghost_torus(kind: &str, side: usize) -> Option<Scene> {
-    let (n, height_scale, heights): (usize, f64, Vec<f32>) = match kind {
+    let (name, n, height_scale, heights): (&'static str, usize, f64, Vec<f32>) = match kind {
         "torus-spikes" => (
+            "torus-spikes",
             12,
             0.5,
             (0..side * side)
@@ -682,13 +683,14 @@ pub fn ghost_torus(kind: &str, side: usize) -> Option<Scene> {
                 .collect(),
         ),
         "torus-tilted" => (
+            "torus-tilted",
             32,
             0.15,
             (0..side * side)
                 .map(|k| f32::from((k % side + k / side) % 2 == 1))
                 .collect(),
         ),
-        "torus-twisted" => (32, 0.6, fbm_map(side, 4, 6, 53)),
+        "torus-twisted" => ("torus-twisted", 32, 0.6, fbm_map(side, 4, 6, 53)),
         _ => return None,
     };
     let (positions, mut normals, mut uvs, triangles) = torus(n, 1.0, 0.4);
@@ -715,11 +717,6 @@ pub fn ghost_torus(kind: &str, side: usize) -> Option<Scene> {
             uv.y += 2.0 * uv.x;
         }
     }
-    let name = match kind {
-        "torus-spikes" => "torus-spikes",
-        "torus-tilted" => "torus-tilted",
-        _ => "torus-twisted",
-    };
     let mut scene = torus_scene(side);
     scene.name = name;
     scene.positions = positions;

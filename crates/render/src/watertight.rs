@@ -598,11 +598,11 @@ fn measure_in<T: Real>(
             .filter(|v| matches!(v, Verdict::Leak(_)))
             .count();
         let nonlinear = !(affine || marching || tetrahedra || map.is_some());
-        let truth = nonlinear.then(|| TrueSurface::new(surface));
-        let distance_error = truth.as_ref().map(|t| distance_error(scene, t, n));
+        let truth = nonlinear.then(|| (TrueSurface::new(surface), grid_hits(scene, surface, n)));
+        let distance_error = truth.as_ref().map(|(t, hits)| distance_error(hits, t));
         let ghosts = truth
             .as_ref()
-            .map(|t| ghost_count(scene, t, n, judged_hits));
+            .map(|(t, hits)| ghost_count(hits, t, n, judged_hits));
         reports.push(LeakReport {
             method,
             distance_error,
@@ -832,26 +832,34 @@ pub enum JudgedHits {
     Spaced(usize),
 }
 
-/// Hits of nonlinear tracing on the `n x n` grid judged by the oracle ([`GhostCount`]).
-fn ghost_count<T: Real>(
+/// A grid ray that hit: its cell (row-major), the ray and the nonlinear tracer's hit.
+type GridHit<T> = (usize, Ray<T>, nlrt_accel::SurfaceHit<T>);
+
+/// The hits of nonlinear tracing on the `n x n` grid, in grid order (traced once for both
+/// the ghost count and the distance errors).
+fn grid_hits<T: Real>(
     scene: &Scene,
+    surface: &nlrt_accel::DisplacedSurface<T>,
+    n: usize,
+) -> Vec<GridHit<T>> {
+    (0..n * n)
+        .into_par_iter()
+        .filter_map(|k| {
+            let ray = grid_ray::<T>(scene, n, k)?;
+            let hit =
+                surface.intersect(&ray, T::ZERO, T::INFINITY, &mut TraversalStats::default())?;
+            Some((k, ray, hit))
+        })
+        .collect()
+}
+
+/// The `hits` judged by the oracle ([`GhostCount`]).
+fn ghost_count<T: Real>(
+    hits: &[GridHit<T>],
     truth: &TrueSurface<'_, T>,
     n: usize,
     which: JudgedHits,
 ) -> GhostCount {
-    let hits: Vec<(usize, Ray<T>, nlrt_accel::SurfaceHit<T>)> = (0..n * n)
-        .into_par_iter()
-        .filter_map(|k| {
-            let ray = grid_ray::<T>(scene, n, k)?;
-            let hit = truth.surface.intersect(
-                &ray,
-                T::ZERO,
-                T::INFINITY,
-                &mut TraversalStats::default(),
-            )?;
-            Some((k, ray, hit))
-        })
-        .collect();
     let stride = match which {
         JudgedHits::Every => 1,
         JudgedHits::Spaced(count) => hits.len().div_ceil(count.max(1)).max(1),
@@ -895,26 +903,13 @@ fn ghost_count<T: Real>(
     }
 }
 
-/// [`DistanceError`] over about [`DISTANCE_SAMPLES`] evenly spaced rays of the grid that hit.
-fn distance_error<T: Real>(scene: &Scene, truth: &TrueSurface<'_, T>, n: usize) -> DistanceError {
-    let hits: Vec<(Ray<T>, nlrt_accel::SurfaceHit<T>)> = (0..n * n)
-        .into_par_iter()
-        .filter_map(|k| {
-            let ray = grid_ray::<T>(scene, n, k)?;
-            let hit = truth.surface.intersect(
-                &ray,
-                T::ZERO,
-                T::INFINITY,
-                &mut TraversalStats::default(),
-            )?;
-            Some((ray, hit))
-        })
-        .collect();
+/// [`DistanceError`] over about [`DISTANCE_SAMPLES`] evenly spaced `hits`.
+fn distance_error<T: Real>(hits: &[GridHit<T>], truth: &TrueSurface<'_, T>) -> DistanceError {
     let stride = hits.len().div_ceil(DISTANCE_SAMPLES).max(1);
     let errors: Vec<Option<f64>> = hits
         .par_iter()
         .step_by(stride)
-        .map(|(ray, hit)| {
+        .map(|(_, ray, hit)| {
             let t = hit.hit.t.to_f64();
             truth
                 .hit_around(ray, hit.triangle as usize, hit.texel, 0.0)
