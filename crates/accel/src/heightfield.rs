@@ -202,11 +202,15 @@ impl HeightField {
                 ]
             }
             1 => {
+                // The 3 x 3 corner samples of the node's 2 x 2 texels, each row and column
+                // wrapped once (not once per sample).
                 let (i0, j0) = (2 * x, 2 * y);
+                let columns = [i0, i0 + 1, i0 + 2].map(|i| self.wrap_index(i));
                 let mut b = [u16::MAX, 0];
                 for j in j0..=j0 + 2 {
-                    for i in i0..=i0 + 2 {
-                        let s = self.sample(i, j);
+                    let row = &self.samples[self.wrap_index(j) * self.side..][..self.side];
+                    for &i in &columns {
+                        let s = row[i];
                         b = [b[0].min(s), b[1].max(s)];
                     }
                 }

@@ -1,34 +1,39 @@
-//! Traversal counters of nonlinear tracing (f32) per primary ray of a built-in scene at its
-//! small size (or, with a second argument `paper`, at the paper's), 160 x 120 pixel-centre
-//! rays, one thread: prism (TLAS leaf) visits, node visits of the BLAS walk, texel tests and
-//! walks that fell back to box tests.
+//! Traversal counters of nonlinear tracing per primary ray of a built-in scene, one thread:
+//! prism (TLAS leaf) visits, node visits of the BLAS walk, texel tests and walks that fell
+//! back to box tests, with a checksum of the hits (triangle, texel and the bits of the
+//! distance) that tells whether a change to the traversal altered any answer.
 //!
-//! `cargo run --release --example traversal_counts -p nlrt-render -- fur paper`
+//! `cargo run --release --example traversal_counts -p nlrt-render -- fur paper f32 160`
+//!
+//! Arguments: scene, `small` or `paper` map sizes, `f32` or `f64`, pixels per row (rows:
+//! 3/4 of it). Instruction counts of the trace alone, which do not depend on the load of a
+//! shared machine: `valgrind --tool=callgrind --toggle-collect='*trace_all*'` on the built
+//! example.
 
 use nlrt_accel::TraversalStats;
-use nlrt_poly::glam::Vec3;
-use nlrt_render::scenes::{Size, builtin};
+use nlrt_poly::{Real, Vector3};
+use nlrt_render::scenes::{Scene, Size, builtin};
 use nlrt_render::tracers::Nonlinear;
 use nlrt_shellmap::Ray;
-fn main() {
-    let name = std::env::args().nth(1).unwrap_or("mountain".into());
-    let size = match std::env::args().nth(2).as_deref() {
-        None | Some("small") => Size::Small,
-        Some("paper") => Size::Paper,
-        Some(other) => {
-            eprintln!("unknown size {other} (small or paper)");
-            std::process::exit(2);
-        }
-    };
-    let Some(scene) = builtin(&name, size) else {
-        eprintln!("unknown scene {name}");
-        std::process::exit(2);
-    };
-    let nl = Nonlinear::<f32>::new(&scene);
-    let (w, h) = (160, 120);
+
+fn fail(message: &str) -> ! {
+    eprintln!("traversal_counts: {message}");
+    std::process::exit(2);
+}
+
+/// Hits, counters and the hits' checksum of `w x h` pixel-centre camera rays.
+#[inline(never)]
+fn trace_all<T: Real>(
+    scene: &Scene,
+    nl: &Nonlinear<T>,
+    w: usize,
+    h: usize,
+) -> (u32, TraversalStats, u64) {
     let mut st = TraversalStats::default();
-    let mut hits = 0;
-    let t0 = std::time::Instant::now();
+    let (mut hits, mut checksum) = (0, 0u64);
+    let v = |a: nlrt_poly::glam::DVec3| {
+        T::Vec3::new(T::from_f64(a.x), T::from_f64(a.y), T::from_f64(a.z))
+    };
     for y in 0..h {
         for x in 0..w {
             let d = scene.camera.direction(
@@ -36,26 +41,66 @@ fn main() {
                 (y as f64 + 0.5) / h as f64,
                 w as f64 / h as f64,
             );
-            let o = scene.camera.eye;
-            let ray = Ray::new(
-                Vec3::new(o.x as f32, o.y as f32, o.z as f32),
-                Vec3::new(d.x as f32, d.y as f32, d.z as f32),
-            )
-            .unwrap();
-            let hit = match &nl {
-                Nonlinear::Displaced(s) => s.intersect(&ray, 0.0, f32::INFINITY, &mut st).is_some(),
-                Nonlinear::Shell(s) => s.intersect(&ray, 0.0, f32::INFINITY, &mut st).is_some(),
+            let Some(ray) = Ray::new(v(scene.camera.eye), v(d)) else {
+                continue;
             };
-            hits += hit as u32;
+            let hit = match nl {
+                Nonlinear::Displaced(s) => s
+                    .intersect(&ray, T::ZERO, T::INFINITY, &mut st)
+                    .map(|h| (h.triangle, h.texel, h.hit.t)),
+                Nonlinear::Shell(s) => s
+                    .intersect(&ray, T::ZERO, T::INFINITY, &mut st)
+                    .map(|h| (h.triangle, [0, 0], h.hit.t)),
+            };
+            if let Some((triangle, texel, t)) = hit {
+                hits += 1;
+                let key = u64::from(triangle)
+                    ^ (u64::from(texel[0] as u32) << 20)
+                    ^ (u64::from(texel[1] as u32) << 40)
+                    ^ t.to_f64().to_bits();
+                checksum = checksum.rotate_left(5) ^ key;
+            }
         }
     }
+    (hits, st, checksum)
+}
+
+fn run<T: Real>(name: &str, scene: &Scene, w: usize) {
+    let h = w * 3 / 4;
+    let nl = Nonlinear::<T>::new(scene);
+    let t0 = std::time::Instant::now();
+    let (hits, st, checksum) = trace_all(scene, &nl, w, h);
     let n = (w * h) as f64;
     println!(
-        "{name}: {:.3} s, hits {hits}, per ray: prisms {:.2} nodes {:.2} texels {:.2} fallbacks {}",
+        "{name} {}: {:.3} s, hits {hits}, checksum {checksum:016x}, per ray: prisms {:.2} nodes {:.2} texels {:.2} fallbacks {}",
+        T::NAME,
         t0.elapsed().as_secs_f64(),
-        st.prism_tests as f64 / n,
-        st.box_tests as f64 / n,
-        st.texel_tests as f64 / n,
+        f64::from(st.prism_tests) / n,
+        f64::from(st.box_tests) / n,
+        f64::from(st.texel_tests) / n,
         st.fallbacks
     );
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    let name = args.get(1).map_or("mountain", String::as_str);
+    let size = match args.get(2).map(String::as_str) {
+        None | Some("small") => Size::Small,
+        Some("paper") => Size::Paper,
+        Some(other) => fail(&format!("unknown size {other} (small or paper)")),
+    };
+    let w = match args.get(4).map(|s| s.parse::<usize>()) {
+        None => 160,
+        Some(Ok(w)) if (4..=4096).contains(&w) => w,
+        Some(_) => fail("pixels per row: a number from 4 to 4096"),
+    };
+    let Some(scene) = builtin(name, size) else {
+        fail(&format!("unknown scene {name}"));
+    };
+    match args.get(3).map(String::as_str) {
+        None | Some("f32") => run::<f32>(name, &scene, w),
+        Some("f64") => run::<f64>(name, &scene, w),
+        Some(other) => fail(&format!("unknown precision {other} (f32 or f64)")),
+    }
 }

@@ -24,6 +24,7 @@
 // `!(a > b)` is deliberate: it is true when either side is NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+pub mod bench_json;
 pub mod edit;
 #[cfg(feature = "embree")]
 pub mod embree_reference;

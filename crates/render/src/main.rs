@@ -10,7 +10,7 @@ use nlrt_render::report::{self, ReportOptions};
 use nlrt_render::scenes::{self, SCENE_NAMES, Size};
 use nlrt_render::watertight;
 use nlrt_render::{edit, solvers};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 #[derive(Parser)]
@@ -180,6 +180,10 @@ enum Command {
         /// curved-f32, tessellated-f64; an unknown one lists them all; default: all).
         #[arg(long, value_delimiter = ',', value_parser = parse_method)]
         methods: Vec<Method>,
+        /// Also write every column as JSON to this file, with the machine, the build's target
+        /// features and the commit (format `nlrt-bench/1`, described in `docs/measurements.md`).
+        #[arg(long, value_name = "FILE")]
+        json: Option<PathBuf>,
     },
     /// The full report: every scene and method, images, differences, and the solver table.
     Report {
@@ -499,6 +503,7 @@ fn main() -> ExitCode {
             args,
             no_reference,
             methods,
+            json,
         } => {
             let scenes = if scenes.is_empty() {
                 SCENE_NAMES.iter().map(|s| s.to_string()).collect()
@@ -508,6 +513,14 @@ fn main() -> ExitCode {
             if let Err(e) = check_scenes(&scenes) {
                 return fail("bench", e);
             }
+            // Opened before the run, so that an unwritable path fails at once, not after it.
+            let json_file = match json.as_ref().map(std::fs::File::create).transpose() {
+                Ok(f) => f,
+                Err(e) => {
+                    let path = json.as_deref().unwrap_or(Path::new("")).display();
+                    return fail("bench", format!("cannot write {path}: {e}"));
+                }
+            };
             let methods = Method::ALL
                 .into_iter()
                 .filter(|m| methods.is_empty() || methods.contains(m))
@@ -521,9 +534,16 @@ fn main() -> ExitCode {
                 out_dir: None,
                 scaling: true,
             };
-            match report::run(&opts) {
-                Ok(md) => {
+            match report::run_with_rows(&opts) {
+                Ok((md, rows)) => {
                     print!("{md}");
+                    if let (Some(mut file), Some(path)) = (json_file, json.as_ref()) {
+                        use std::io::Write as _;
+                        let text = nlrt_render::bench_json::to_json(&opts, &rows);
+                        if let Err(e) = file.write_all(text.as_bytes()) {
+                            return fail("bench", format!("cannot write {}: {e}", path.display()));
+                        }
+                    }
                     ExitCode::SUCCESS
                 }
                 Err(e) => fail("bench", e),

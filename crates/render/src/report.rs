@@ -2,6 +2,7 @@
 //! rays), init time, memory, and error against the f64 pre-tessellated reference (hit/miss
 //! mismatches and depth error of the primary rays), with images.
 
+use crate::bench_json::BenchRow;
 use crate::image::write_png;
 use crate::integrator::{Frame, RenderOptions, render};
 use crate::method::Method;
@@ -263,7 +264,16 @@ fn speed_against_error_svg(points: &[(Method, String, f64, ErrorStats)]) -> Stri
 /// # Errors
 /// An unknown scene name, or an image that cannot be written.
 pub fn run(opts: &ReportOptions) -> Result<String, String> {
+    run_with_rows(opts).map(|(md, _)| md)
+}
+
+/// [`run`], with every row of the table as data (for `nlrt bench --json`).
+///
+/// # Errors
+/// As [`run`].
+pub fn run_with_rows(opts: &ReportOptions) -> Result<(String, Vec<BenchRow>), String> {
     let mut md = String::new();
+    let mut rows = Vec::new();
     let r = &opts.render;
     let _ = writeln!(
         md,
@@ -318,6 +328,7 @@ pub fn run(opts: &ReportOptions) -> Result<String, String> {
             let reference = run_of(m.method.reference());
             let vs = |other: Option<&MethodRun>| other.map(|o| compare(&m.frame, &o.frame));
             let (e_ref, e_64) = (vs(reference), vs(run_of(m.method.f64_partner())));
+            rows.push(BenchRow::new(name, m, e_ref, e_64));
             if let Some(e) = e_ref {
                 points.push((m.method, name.clone(), m.all_mrays(), e));
             }
@@ -408,5 +419,5 @@ pub fn run(opts: &ReportOptions) -> Result<String, String> {
         }
         let _ = Path::new(dir);
     }
-    Ok(md)
+    Ok((md, rows))
 }

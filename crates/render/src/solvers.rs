@@ -118,6 +118,18 @@ impl Default for Options {
 /// instruction).
 #[must_use]
 pub fn target_features() -> String {
+    let f = target_feature_list();
+    if f.is_empty() {
+        "none (software fma)".to_string()
+    } else {
+        f.join(", ")
+    }
+}
+
+/// The target features this binary was compiled with that its kernels use (fma, avx2,
+/// avx512f), as a list.
+#[must_use]
+pub fn target_feature_list() -> Vec<&'static str> {
     let mut f = Vec::new();
     if cfg!(target_feature = "fma") {
         f.push("fma");
@@ -128,11 +140,7 @@ pub fn target_features() -> String {
     if cfg!(target_feature = "avx512f") {
         f.push("avx512f");
     }
-    if f.is_empty() {
-        "none (software fma)".to_string()
-    } else {
-        f.join(", ")
-    }
+    f
 }
 
 fn progress(msg: &str) {

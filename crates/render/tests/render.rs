@@ -557,3 +557,72 @@ fn ghost_tori_hits_are_judged_by_the_oracle() {
         }
     }
 }
+
+/// `nlrt bench --json` writes every row of the table with the machine, target features and
+/// commit; the rates are the ray counts over the seconds, and an unwritable path is an exit-2
+/// error before anything runs.
+#[test]
+fn bench_json_holds_every_row() {
+    let dir = std::env::temp_dir().join(format!("nlrt-bench-json-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("bench.json");
+    let p = path.to_str().unwrap();
+    let args = [
+        "bench",
+        "torus",
+        "--methods",
+        "nonlinear-f32,nonlinear-f64",
+        "--size",
+        "24x18",
+        "--json",
+        p,
+    ];
+    let out = nlrt(&args);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let table = String::from_utf8_lossy(&out.stdout);
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    assert_eq!(json["format"], "nlrt-bench/1");
+    assert_eq!(json["settings"]["width"], 24);
+    assert!(
+        json["nlrt"]["commit"]
+            .as_str()
+            .is_some_and(|c| !c.is_empty())
+    );
+    assert!(json["build"]["target_features"].is_array());
+    let rows = json["rows"].as_array().unwrap();
+    assert_eq!(rows.len(), 2);
+    for (row, slug) in rows.iter().zip(["nonlinear-f32", "nonlinear-f64"]) {
+        assert_eq!(row["scene"], "torus");
+        assert_eq!(row["method"], slug);
+        assert_eq!(row["primary_rays"], 24 * 18);
+        let (rays, seconds) = (
+            row["all_rays"].as_f64().unwrap(),
+            row["seconds"].as_f64().unwrap(),
+        );
+        let rate = row["all_mrays_per_s"].as_f64().unwrap();
+        assert!((rate - rays / seconds / 1e6).abs() <= 1e-9 * rate, "{row}");
+        // The table's row shows the same rate.
+        let line = table
+            .lines()
+            .find(|l| {
+                l.starts_with(&format!(
+                    "| torus | {} |",
+                    row["method_name"].as_str().unwrap()
+                ))
+            })
+            .unwrap();
+        assert!(line.contains(&format!("{:.3}", rate)), "{line} vs {rate}");
+        assert_eq!(row["vs_f64"]["against"], "nonlinear-f64");
+        assert!(row["vs_reference"].is_null());
+    }
+    let bad = dir.join("missing").join("bench.json");
+    let out = nlrt(&["bench", "torus", "--json", bad.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("cannot write"));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
