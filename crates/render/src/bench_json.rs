@@ -16,6 +16,7 @@
 //! A row holds the seconds and ray counts the rates come from; the error fields are `null`
 //! where the table shows `-`.
 
+use crate::ray_stream::Replay;
 use crate::report::{ErrorStats, MethodRun, ReportOptions};
 use serde::Serialize;
 
@@ -54,6 +55,41 @@ impl ErrorFields {
     }
 }
 
+/// One replay of a ray stream ([`Replay`]).
+#[derive(Clone, Debug, Serialize)]
+pub struct ReplayFields {
+    /// Rays traced.
+    pub rays: u64,
+    /// Rays that hit.
+    pub hits: u64,
+    /// Seconds.
+    pub seconds: f64,
+    /// Million rays per second.
+    pub mrays_per_s: f64,
+}
+
+impl ReplayFields {
+    fn new(r: &Replay) -> Self {
+        Self {
+            rays: r.rays,
+            hits: r.hits,
+            seconds: r.seconds,
+            mrays_per_s: r.mrays(),
+        }
+    }
+}
+
+/// A method's replays of the scene's ray stream ([`crate::report::StreamTimes`]).
+#[derive(Clone, Debug, Serialize)]
+pub struct StreamFields {
+    /// The primary rays, every thread.
+    pub primary: ReplayFields,
+    /// Every ray, every thread.
+    pub all: ReplayFields,
+    /// Every ray, one thread.
+    pub all_one_thread: ReplayFields,
+}
+
 /// One scene and method: a row of the bench table.
 #[derive(Clone, Debug, Serialize)]
 pub struct BenchRow {
@@ -79,6 +115,8 @@ pub struct BenchRow {
     pub all_mrays_per_s: f64,
     /// Seconds of the same render on one thread (`null` when not measured).
     pub one_thread_seconds: Option<f64>,
+    /// The scene's recorded ray stream replayed into this method (`null` without it).
+    pub stream: Option<StreamFields>,
     /// Against the f64 pre-tessellated reference (`null` when it did not run).
     pub vs_reference: Option<ErrorFields>,
     /// Against the method's f64 partner (`null` when it did not run).
@@ -108,6 +146,11 @@ impl BenchRow {
             primary_mrays_per_s: run.primary_mrays(),
             all_mrays_per_s: run.all_mrays(),
             one_thread_seconds: run.one_thread_seconds,
+            stream: run.stream.map(|st| StreamFields {
+                primary: ReplayFields::new(&st.primary),
+                all: ReplayFields::new(&st.all),
+                all_one_thread: ReplayFields::new(&st.all_one_thread),
+            }),
             vs_reference: vs_reference.map(|e| ErrorFields::new(m.reference().slug(), &e)),
             vs_f64: vs_f64.map(|e| ErrorFields::new(m.f64_partner().slug(), &e)),
         }

@@ -3,7 +3,9 @@
 //! a scene built at Embree's default quality, one ray at a time (`rtcIntersect1`, incoherent
 //! context), so that the report compares against what users of displacement mapping pick today.
 //! Its memory is what Embree reports allocating through its memory-monitor callback (BVH and
-//! buffers).
+//! buffers). Embree picks its widest kernels for the CPU unless told otherwise; [`Isa::Build`]
+//! pins them to the instruction set this binary is compiled for, so that a comparison with
+//! nlrt's kernels is at one vector width.
 
 use std::sync::atomic::{AtomicIsize, Ordering};
 
@@ -36,18 +38,43 @@ unsafe extern "C" fn count_bytes(ptr: *mut std::ffi::c_void, bytes: isize, _post
     true
 }
 
+/// Which kernels Embree may use.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Isa {
+    /// The instruction set of this build (`avx2` when compiled with it, as for x86-64-v3;
+    /// else `sse4.2` with it, else `sse2`): Embree's device config `isa=...`.
+    Build,
+    /// Embree's choice for this CPU (no device config).
+    Native,
+}
+
+impl Isa {
+    /// Embree's device configuration string (NUL-terminated), `None` for its default.
+    fn config(self) -> Option<&'static [u8]> {
+        match self {
+            Isa::Native => None,
+            Isa::Build if cfg!(target_feature = "avx2") => Some(b"isa=avx2\0"),
+            Isa::Build if cfg!(target_feature = "sse4.2") => Some(b"isa=sse4.2\0"),
+            Isa::Build => Some(b"isa=sse2\0"),
+        }
+    }
+}
+
 impl EmbreeTessellated {
-    /// Tessellates `scene` and builds the Embree scene; `None` when Embree cannot create a
-    /// device (no supported CPU, or the library refuses).
+    /// Tessellates `scene` and builds the Embree scene with kernels `isa`; `None` when Embree
+    /// cannot create a device (no supported CPU, or the library refuses).
     #[must_use]
-    pub fn new(scene: &Scene) -> Option<Self> {
+    pub fn new(scene: &Scene, isa: Isa) -> Option<Self> {
         let tessellated = Tessellated::new(scene);
         let triangles = tessellated.triangles();
         let allocated = Box::new(AtomicIsize::new(0));
         // SAFETY: plain calls of Embree's C API on handles created here and checked for null;
         // the buffers are written within the sizes requested from Embree.
         unsafe {
-            let device = sys::rtcNewDevice(std::ptr::null());
+            let config = isa
+                .config()
+                .map_or(std::ptr::null(), |c| c.as_ptr().cast::<std::ffi::c_char>());
+            let device = sys::rtcNewDevice(config);
             if device.is_null() {
                 return None;
             }

@@ -4,6 +4,7 @@
 //! f64; only the intersection runs in the method's precision, behind [`Tracer`].
 
 use crate::material::Rng;
+use crate::ray_stream::{RayKind, RayStream, StreamRay};
 use crate::scenes::Scene;
 use crate::tracer::Tracer;
 use nlrt_poly::glam::DVec3;
@@ -76,6 +77,27 @@ pub fn render(
     opts: &RenderOptions,
     progress: &(dyn Fn(usize) + Sync),
 ) -> Frame {
+    render_with(scene, tracer, opts, progress, false).0
+}
+
+/// [`render`], also recording every ray it casts (for [`crate::ray_stream::replay`]); the
+/// frame's time includes the recording.
+#[must_use]
+pub fn render_recording(
+    scene: &Scene,
+    tracer: &dyn Tracer,
+    opts: &RenderOptions,
+) -> (Frame, RayStream) {
+    render_with(scene, tracer, opts, &|_| {}, true)
+}
+
+fn render_with(
+    scene: &Scene,
+    tracer: &dyn Tracer,
+    opts: &RenderOptions,
+    progress: &(dyn Fn(usize) + Sync),
+    record: bool,
+) -> (Frame, RayStream) {
     let (w, h) = (opts.width, opts.height);
     let aspect = w as f64 / h as f64;
     let extent = {
@@ -95,13 +117,25 @@ pub fn render(
     let all = AtomicU64::new(0);
     let rows_done = AtomicU64::new(0);
     let start = std::time::Instant::now();
-    type Row = (Vec<[f32; 3]>, Vec<f64>, Vec<([f32; 3], u32)>);
+    type Row = (
+        Vec<[f32; 3]>,
+        Vec<f64>,
+        Vec<([f32; 3], u32)>,
+        Vec<StreamRay>,
+    );
     let rows: Vec<Row> = (0..h)
         .into_par_iter()
         .map(|y| {
             let mut colors = Vec::with_capacity(w);
             let mut depths = Vec::with_capacity(w);
             let mut aovs = Vec::with_capacity(w);
+            let mut recorded = Vec::new();
+            let mut trace = |origin: DVec3, dir: DVec3, kind: RayKind| {
+                if record {
+                    recorded.push(StreamRay { origin, dir, kind });
+                }
+                tracer.intersect(origin, dir, 0.0, f64::INFINITY)
+            };
             let (mut n_primary, mut n_all) = (0u64, 0u64);
             for x in 0..w {
                 let mut rng = Rng::stream((y * w + x) as u64);
@@ -125,7 +159,12 @@ pub fn render(
                     n_primary += 1;
                     for bounce in 0..=opts.bounces {
                         n_all += 1;
-                        let Some(hit) = tracer.intersect(origin, dir, 0.0, f64::INFINITY) else {
+                        let kind = if bounce == 0 {
+                            RayKind::Primary
+                        } else {
+                            RayKind::Bounce
+                        };
+                        let Some(hit) = trace(origin, dir, kind) else {
                             sum += throughput * sky(dir);
                             break;
                         };
@@ -141,7 +180,7 @@ pub fn render(
                         let cos = n.dot(scene.sun);
                         if cos > 0.0 {
                             n_all += 1;
-                            if tracer.intersect(p, scene.sun, 0.0, f64::INFINITY).is_none() {
+                            if trace(p, scene.sun, RayKind::Shadow).is_none() {
                                 let brdf_pi = scene.material.brdf_times_pi(n, dir, scene.sun);
                                 sum += throughput * sun_radiance * (brdf_pi * cos);
                             }
@@ -165,14 +204,16 @@ pub fn render(
             primary.fetch_add(n_primary, Ordering::Relaxed);
             all.fetch_add(n_all, Ordering::Relaxed);
             progress(rows_done.fetch_add(1, Ordering::Relaxed) as usize + 1);
-            (colors, depths, aovs)
+            (colors, depths, aovs, recorded)
         })
         .collect();
     let seconds = start.elapsed().as_secs_f64();
     let mut color = Vec::with_capacity(w * h);
     let mut depth = Vec::with_capacity(w * h);
     let (mut normal, mut hit_id) = (Vec::with_capacity(w * h), Vec::with_capacity(w * h));
-    for (c, d, a) in rows {
+    let mut stream = RayStream::default();
+    for (c, d, a, r) in rows {
+        stream.rays.extend(r);
         color.extend(c);
         depth.extend(d);
         for (n, id) in a {
@@ -180,7 +221,7 @@ pub fn render(
             hit_id.push(id);
         }
     }
-    Frame {
+    let frame = Frame {
         width: w,
         height: h,
         color,
@@ -190,5 +231,6 @@ pub fn render(
         primary_rays: primary.into_inner(),
         all_rays: all.into_inner(),
         seconds,
-    }
+    };
+    (frame, stream)
 }

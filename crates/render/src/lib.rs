@@ -33,6 +33,7 @@ pub mod integrator;
 pub mod material;
 pub mod method;
 pub mod plot;
+pub mod ray_stream;
 pub mod report;
 pub mod resample;
 pub mod scene_file;

@@ -180,6 +180,10 @@ enum Command {
         /// curved-f32, tessellated-f64; an unknown one lists them all; default: all).
         #[arg(long, value_delimiter = ',', value_parser = parse_method)]
         methods: Vec<Method>,
+        /// Leave out the replay of one recorded ray stream per scene into every method (the
+        /// stream columns: the same rays for every method, timed without shading).
+        #[arg(long)]
+        no_ray_stream: bool,
         /// Also write every column as JSON to this file, with the machine, the build's target
         /// features and the commit (format `nlrt-bench/1`, described in `docs/measurements.md`).
         #[arg(long, value_name = "FILE")]
@@ -331,6 +335,7 @@ fn report_command(output: PathBuf, args: &RenderArgs, solver_samples: usize) -> 
         methods: Method::ALL.to_vec(),
         out_dir: Some(output.clone()),
         scaling: false,
+        ray_stream: false,
     };
     let start = std::time::Instant::now();
     let scenes_md = match report::run(&opts) {
@@ -473,6 +478,7 @@ fn main() -> ExitCode {
                 methods: vec![method],
                 out_dir: None,
                 scaling: false,
+                ray_stream: false,
             };
             let runs = report::run_scene(&built, &opts);
             let run = &runs[0];
@@ -503,6 +509,7 @@ fn main() -> ExitCode {
             args,
             no_reference,
             methods,
+            no_ray_stream,
             json,
         } => {
             let scenes = if scenes.is_empty() {
@@ -533,6 +540,7 @@ fn main() -> ExitCode {
                 methods,
                 out_dir: None,
                 scaling: true,
+                ray_stream: !no_ray_stream,
             };
             match report::run_with_rows(&opts) {
                 Ok((md, rows)) => {

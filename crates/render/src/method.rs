@@ -72,8 +72,12 @@ pub enum Method {
     /// Curved shell mapping in double precision.
     CurvedF64,
     /// The pre-tessellated microtriangles traced by Embree 3 (single precision): what users pick
-    /// today. Only with the `embree` feature.
+    /// today, its kernels pinned to the instruction set this binary is built for (AVX2 for
+    /// x86-64-v3), so that both sides use the same vector width. Only with the `embree` feature.
     EmbreeF32,
+    /// [`Method::EmbreeF32`] with Embree choosing its kernels for this CPU (AVX-512 where the
+    /// CPU has it). Only with the `embree` feature.
+    EmbreeNativeF32,
     /// Pre-tessellated microtriangles in a world-space BVH (f64): the reference.
     Tessellated,
     /// The curved shell mapping's surface pre-tessellated (microtriangle vertices through the
@@ -83,7 +87,7 @@ pub enum Method {
 
 impl Method {
     /// All methods, references last.
-    pub const ALL: [Method; 23] = [
+    pub const ALL: [Method; 24] = [
         Method::NonlinearF32,
         Method::NonlinearF64,
         Method::AffineF32,
@@ -105,6 +109,7 @@ impl Method {
         Method::CurvedF32,
         Method::CurvedF64,
         Method::EmbreeF32,
+        Method::EmbreeNativeF32,
         Method::Tessellated,
         Method::TessellatedCurved,
     ];
@@ -134,6 +139,7 @@ impl Method {
             Method::CurvedF32 => "curved shell f32",
             Method::CurvedF64 => "curved shell f64",
             Method::EmbreeF32 => "Embree 3 pre-tessellated f32",
+            Method::EmbreeNativeF32 => "Embree 3 pre-tessellated f32, native ISA",
             Method::Tessellated => "pre-tessellated f64",
             Method::TessellatedCurved => "pre-tessellated curved f64",
         }
@@ -164,6 +170,7 @@ impl Method {
             Method::CurvedF32 => "curved-f32",
             Method::CurvedF64 => "curved-f64",
             Method::EmbreeF32 => "embree-f32",
+            Method::EmbreeNativeF32 => "embree-native-f32",
             Method::Tessellated => "tessellated-f64",
             Method::TessellatedCurved => "tessellated-curved-f64",
         }
@@ -240,7 +247,7 @@ impl Method {
                 (!matches!(scene.content, Content::Displacement(_)))
                     .then_some("cone tracing renders height fields, not instanced objects")
             }
-            Method::EmbreeF32 => {
+            Method::EmbreeF32 | Method::EmbreeNativeF32 => {
                 if cfg!(feature = "embree") {
                     None
                 } else {
@@ -300,9 +307,17 @@ impl Method {
             Method::CurvedF32 => Box::new(Marching::<f32>::curved(scene)?),
             Method::CurvedF64 => Box::new(Marching::<f64>::curved(scene)?),
             #[cfg(feature = "embree")]
-            Method::EmbreeF32 => Box::new(crate::embree_reference::EmbreeTessellated::new(scene)?),
+            Method::EmbreeF32 => Box::new(crate::embree_reference::EmbreeTessellated::new(
+                scene,
+                crate::embree_reference::Isa::Build,
+            )?),
+            #[cfg(feature = "embree")]
+            Method::EmbreeNativeF32 => Box::new(crate::embree_reference::EmbreeTessellated::new(
+                scene,
+                crate::embree_reference::Isa::Native,
+            )?),
             #[cfg(not(feature = "embree"))]
-            Method::EmbreeF32 => return None,
+            Method::EmbreeF32 | Method::EmbreeNativeF32 => return None,
             Method::Tessellated => Box::new(Tessellated::new(scene)),
             Method::TessellatedCurved => Box::new(Tessellated::curved(scene)),
         })

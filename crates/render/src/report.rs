@@ -4,8 +4,9 @@
 
 use crate::bench_json::BenchRow;
 use crate::image::write_png;
-use crate::integrator::{Frame, RenderOptions, render};
+use crate::integrator::{Frame, RenderOptions, render, render_recording};
 use crate::method::Method;
+use crate::ray_stream::{RayKind, RayStream, Replay, replay};
 use crate::scenes::{self, Scene, Size};
 use crate::tracer::Tracer;
 use std::fmt::Write as _;
@@ -78,6 +79,19 @@ pub struct MethodRun {
     pub frame: Frame,
     /// Seconds of the same render on one thread (when measured).
     pub one_thread_seconds: Option<f64>,
+    /// The scene's recorded ray stream replayed into this method (when measured).
+    pub stream: Option<StreamTimes>,
+}
+
+/// One method's replays of a scene's recorded ray stream ([`crate::ray_stream`]).
+#[derive(Clone, Copy, Debug)]
+pub struct StreamTimes {
+    /// Every ray, all threads.
+    pub all: Replay,
+    /// The primary rays, all threads.
+    pub primary: Replay,
+    /// Every ray, one thread.
+    pub all_one_thread: Replay,
 }
 
 impl MethodRun {
@@ -109,6 +123,10 @@ pub struct ReportOptions {
     pub out_dir: Option<PathBuf>,
     /// Also render on one thread and report the speed-up of all threads over it.
     pub scaling: bool,
+    /// Also record one ray stream per scene (rendered with the scene's first method) and
+    /// replay it into every method: primary rays and all rays on every thread, all rays on
+    /// one thread.
+    pub ray_stream: bool,
 }
 
 /// A progress bar over image rows on a terminal (indicatif); nothing when stderr is not one.
@@ -143,7 +161,40 @@ fn build(scene: &Scene, method: Method) -> Option<(Box<dyn Tracer>, f64)> {
 /// Renders `scene` with every method of `opts`.
 #[must_use]
 pub fn run_scene(scene: &Scene, opts: &ReportOptions) -> Vec<MethodRun> {
-    opts.methods
+    run_scene_with_stream(scene, opts).0
+}
+
+/// [`run_scene`], with the ray stream the replays used (recorded with the first supported
+/// method, when `opts.ray_stream`).
+fn run_scene_with_stream(
+    scene: &Scene,
+    opts: &ReportOptions,
+) -> (Vec<MethodRun>, Option<(Method, RayStream)>) {
+    let recorded = opts
+        .ray_stream
+        .then(|| opts.methods.iter().copied().find(|m| m.supports(scene)))
+        .flatten()
+        .and_then(|method| {
+            eprintln!("  {}: recording the ray stream with {method}", scene.name);
+            let (tracer, _) = build(scene, method)?;
+            Some((
+                method,
+                render_recording(scene, tracer.as_ref(), &opts.render).1,
+            ))
+        });
+    let one_thread = |f: &(dyn Fn() -> Replay + Sync)| {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build();
+        pool.map_or(
+            Replay {
+                rays: 0,
+                hits: 0,
+                seconds: f64::NAN,
+            },
+            |pool| pool.install(f),
+        )
+    };
+    let runs = opts
+        .methods
         .iter()
         .filter(|m| m.supports(scene))
         .map(|&method| {
@@ -162,15 +213,25 @@ pub fn run_scene(scene: &Scene, opts: &ReportOptions) -> Vec<MethodRun> {
                     pool.install(|| render(scene, tracer.as_ref(), &opts.render, &|_| {}).seconds)
                 })
             });
+            let stream = recorded.as_ref().map(|(_, stream)| {
+                let tracer = tracer.as_ref();
+                StreamTimes {
+                    all: replay(tracer, stream, None),
+                    primary: replay(tracer, stream, Some(RayKind::Primary)),
+                    all_one_thread: one_thread(&|| replay(tracer, stream, None)),
+                }
+            });
             MethodRun {
                 method,
                 init_seconds,
                 memory_bytes: tracer.memory_bytes(),
                 frame,
                 one_thread_seconds,
+                stream,
             }
         })
-        .collect()
+        .collect();
+    (runs, recorded)
 }
 
 fn mib(bytes: usize) -> f64 {
@@ -219,6 +280,7 @@ fn speed_against_error_svg(points: &[(Method, String, f64, ErrorStats)]) -> Stri
         Method::CurvedF32 => "#17becf",
         Method::CurvedF64 => "#9edae5",
         Method::EmbreeF32 => "#000000",
+        Method::EmbreeNativeF32 => "#555555",
         Method::Tessellated => "#2ca02c",
         Method::TessellatedCurved => "#bcbd22",
     };
@@ -292,18 +354,25 @@ pub fn run_with_rows(opts: &ReportOptions) -> Result<(String, Vec<BenchRow>), St
     );
     let _ = writeln!(
         md,
-        "| scene | method | init s | accel MiB | Mrays/s primary | Mrays/s all | {}miss/hit mismatch vs ref | depth err vs ref median / p99 | mismatch vs f64 | depth err vs f64 p99 / max |",
+        "| scene | method | init s | accel MiB | Mrays/s primary | Mrays/s all | {}{}miss/hit mismatch vs ref | depth err vs ref median / p99 | mismatch vs f64 | depth err vs f64 p99 / max |",
         if opts.scaling {
             format!("speed-up {} threads / 1 | ", rayon::current_num_threads())
         } else {
             String::new()
+        },
+        if opts.ray_stream {
+            "stream Mrays/s primary | stream Mrays/s all | stream Mrays/s all, 1 thread | "
+        } else {
+            ""
         }
     );
     let _ = writeln!(
         md,
-        "|---|---|---|---|---|---|---|{}---|---|---|",
-        if opts.scaling { "---|" } else { "" }
+        "|---|---|---|---|---|---|---|{}{}---|---|---|",
+        if opts.scaling { "---|" } else { "" },
+        if opts.ray_stream { "---|---|---|" } else { "" }
     );
+    let mut stream_notes = Vec::new();
     let mut ran = Vec::new();
     let mut points = Vec::new();
     for name in &opts.scenes {
@@ -318,7 +387,16 @@ pub fn run_with_rows(opts: &ReportOptions) -> Result<(String, Vec<BenchRow>), St
             scene.triangles.len(),
             scene.content.describe()
         );
-        let runs = run_scene(&scene, opts);
+        let (runs, recorded) = run_scene_with_stream(&scene, opts);
+        if let Some((method, stream)) = &recorded {
+            stream_notes.push(format!(
+                "{name}: {} rays ({} primary, {} shadow, {} bounce), recorded with {method}",
+                stream.len(),
+                stream.count(RayKind::Primary),
+                stream.count(RayKind::Shadow),
+                stream.count(RayKind::Bounce)
+            ));
+        }
         ran.push((
             name.clone(),
             runs.iter().map(|m| m.method).collect::<Vec<_>>(),
@@ -339,7 +417,7 @@ pub fn run_with_rows(opts: &ReportOptions) -> Result<(String, Vec<BenchRow>), St
             };
             let _ = writeln!(
                 md,
-                "| {name} | {} | {:.3} | {:.1} | {:.3} | {:.3} | {}{} | {} | {} | {} |",
+                "| {name} | {} | {:.3} | {:.1} | {:.3} | {:.3} | {}{}{} | {} | {} | {} |",
                 m.method,
                 m.init_seconds,
                 mib(m.memory_bytes),
@@ -348,6 +426,12 @@ pub fn run_with_rows(opts: &ReportOptions) -> Result<(String, Vec<BenchRow>), St
                 m.one_thread_seconds.map_or(String::new(), |one| format!(
                     "{:.2} | ",
                     one / m.frame.seconds
+                )),
+                m.stream.map_or(String::new(), |st| format!(
+                    "{:.3} | {:.3} | {:.3} | ",
+                    st.primary.mrays(),
+                    st.all.mrays(),
+                    st.all_one_thread.mrays()
                 )),
                 fmt_rate(e_ref),
                 e_ref.map_or("-".into(), |e| format!(
@@ -375,6 +459,17 @@ pub fn run_with_rows(opts: &ReportOptions) -> Result<(String, Vec<BenchRow>), St
                     .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
                 }
             }
+        }
+    }
+    if !stream_notes.is_empty() {
+        let _ = writeln!(
+            md,
+            "\nStream columns: every method traced the same recorded rays (the render's primary, \
+             shadow and bounce rays of one method, replayed in render order in chunks of \
+             consecutive rays), timed without shading. Ray streams:\n"
+        );
+        for note in &stream_notes {
+            let _ = writeln!(md, "- {note}");
         }
     }
     if let Some(dir) = &opts.out_dir

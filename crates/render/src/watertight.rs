@@ -400,6 +400,7 @@ fn judged_precision(method: Method) -> Result<Precision, String> {
         | Method::TetrahedraF64 => Ok(Precision::F64),
         Method::Tessellated
         | Method::EmbreeF32
+        | Method::EmbreeNativeF32
         | Method::TessellatedCurved
         | Method::GeometryImageF32
         | Method::GeometryImageF64

@@ -451,18 +451,21 @@ fn cone_tracing_silhouette_correction_cuts_the_mismatches_on_the_cylinder() {
 
 /// With the `embree` feature: Embree 3 traces the reference's own triangles, so its hits are
 /// the f64 reference's to f32 rounding (1e-5 relative, as for the other f32 methods on these
-/// triangles), on a height field and on a shell-mapped object.
+/// triangles), on a height field and on a shell-mapped object, with its kernels pinned to
+/// this build's instruction set and with its native choice.
 #[cfg(feature = "embree")]
 #[test]
 fn embree_traces_the_reference_triangles() {
-    use nlrt_render::embree_reference::EmbreeTessellated;
+    use nlrt_render::embree_reference::{EmbreeTessellated, Isa};
     for scene in [scenes::mountain(128), scenes::cornell(4)] {
         let reference = render(&scene, &Tessellated::new(&scene), &small(), &|_| {});
-        let embree = EmbreeTessellated::new(&scene).expect("an Embree device");
-        let frame = render(&scene, &embree, &small(), &|_| {});
-        let e = compare(&frame, &reference);
-        assert!(e.mismatches <= 1, "{}: {e:?}", scene.name);
-        assert!(e.depth_max < 1e-5, "{}: {e:?}", scene.name);
+        for isa in [Isa::Build, Isa::Native] {
+            let embree = EmbreeTessellated::new(&scene, isa).expect("an Embree device");
+            let frame = render(&scene, &embree, &small(), &|_| {});
+            let e = compare(&frame, &reference);
+            assert!(e.mismatches <= 1, "{} {isa:?}: {e:?}", scene.name);
+            assert!(e.depth_max < 1e-5, "{} {isa:?}: {e:?}", scene.name);
+        }
     }
 }
 
@@ -619,10 +622,50 @@ fn bench_json_holds_every_row() {
         assert!(line.contains(&format!("{:.3}", rate)), "{line} vs {rate}");
         assert_eq!(row["vs_f64"]["against"], "nonlinear-f64");
         assert!(row["vs_reference"].is_null());
+        // Both methods replayed the one stream recorded with the first.
+        let stream = &row["stream"];
+        assert_eq!(stream["primary"]["rays"], 24 * 18);
+        assert_eq!(stream["all"]["rays"], rows[0]["all_rays"], "{row}");
+        assert_eq!(stream["all_one_thread"]["rays"], stream["all"]["rays"]);
+        assert_eq!(stream["all_one_thread"]["hits"], stream["all"]["hits"]);
     }
+    assert!(table.contains("recorded with nonlinear f32"), "{table}");
     let bad = dir.join("missing").join("bench.json");
     let out = nlrt(&["bench", "torus", "--json", bad.to_str().unwrap()]);
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("cannot write"));
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A recorded ray stream holds every ray the render cast, in its kinds; replayed into the
+/// tracer that recorded it, its primary rays hit exactly where the frame has a depth, and
+/// every ray hits as often on one thread as on all.
+#[test]
+fn a_replayed_ray_stream_gives_the_recording_renders_hits() {
+    use nlrt_render::integrator::render_recording;
+    use nlrt_render::ray_stream::{RayKind, replay};
+    let scene = scenes::builtin("torus", scenes::Size::Small).unwrap();
+    let tracer = Nonlinear::<f64>::new(&scene);
+    let opts = RenderOptions {
+        width: 40,
+        height: 30,
+        spp: 1,
+        bounces: 2,
+    };
+    let (frame, stream) = render_recording(&scene, &tracer, &opts);
+    assert_eq!(stream.len() as u64, frame.all_rays);
+    assert_eq!(stream.count(RayKind::Primary), frame.primary_rays);
+    assert!(stream.count(RayKind::Shadow) > 0 && stream.count(RayKind::Bounce) > 0);
+    let primary = replay(&tracer, &stream, Some(RayKind::Primary));
+    let depths = frame.depth.iter().filter(|d| !d.is_nan()).count() as u64;
+    assert_eq!(primary.hits, depths);
+    let all = replay(&tracer, &stream, None);
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
+    let one = pool.install(|| replay(&tracer, &stream, None));
+    assert_eq!((all.rays, all.hits), (one.rays, one.hits));
+    // Every bounce ray starts from a hit: it was cast only after one.
+    assert!(all.hits >= stream.count(RayKind::Bounce));
 }
