@@ -1,5 +1,8 @@
 //! Solver speed, side by side in one run: nlrt-poly, the closed-form baseline and the `roots`
-//! crate, for f32 and f64. Accuracy of the same methods is measured by `nlrt solvers`.
+//! crate for f32 and f64, and the f64-only `kurbo::common::solve_cubic` (Blinn's method) and
+//! `polycool` (Yuksel's interval solver, target accuracy 1e-15), on the same cubics: all roots
+//! in `[0, 1]` and on the whole line. Accuracy of the same solvers on the oracle's families is
+//! measured by `nlrt solvers`.
 //!
 //! `cargo bench -p nlrt-poly --bench solvers`
 
@@ -26,12 +29,63 @@ fn roots_crate<T: Real + roots::FloatType>(c: [T; 4], lo: T, hi: T) -> usize {
         .count()
 }
 
-fn bench_type<T: Real + roots::FloatType>(crit: &mut Criterion) {
-    let cubics = unit_cubics::<T>();
-    let (lo, hi) = (T::ZERO, T::ONE);
+/// Target accuracy for polycool (see `nlrt solvers`).
+const POLYCOOL_EPSILON: f64 = 1e-15;
 
-    let mut g = crit.benchmark_group(format!("cubic_all_roots_in_unit/{}", T::NAME));
-    g.throughput(Throughput::Elements(SAMPLES as u64));
+fn kurbo_in(c: [f64; 4], lo: f64, hi: f64) -> usize {
+    kurbo::common::solve_cubic(c[0], c[1], c[2], c[3])
+        .iter()
+        .filter(|&&x| x >= lo && x <= hi)
+        .count()
+}
+
+/// On `[lo, hi]`, infinite ends replaced by Cauchy's root bound (as `nlrt solvers` does).
+fn polycool_in(c: [f64; 4], lo: f64, hi: f64) -> usize {
+    let cauchy = 1.0
+        + (c[0] / c[3])
+            .abs()
+            .max((c[1] / c[3]).abs())
+            .max((c[2] / c[3]).abs());
+    let bound = if cauchy.is_finite() { cauchy } else { f64::MAX };
+    let (a, b) = (lo.max(-bound), hi.min(bound));
+    polycool::Poly::new(c)
+        .roots_between(a, b, POLYCOOL_EPSILON)
+        .len()
+}
+
+/// The f64-only peers on the same cubics, on `[lo, hi]`.
+fn bench_f64_peers(crit: &mut Criterion, group: &str, cubics: &[[f64; 4]], lo: f64, hi: f64) {
+    let mut g = crit.benchmark_group(format!("{group}/f64"));
+    g.throughput(Throughput::Elements(cubics.len() as u64));
+    g.bench_function(BenchmarkId::from_parameter("kurbo"), |b| {
+        b.iter(|| {
+            cubics
+                .iter()
+                .map(|&c| kurbo_in(black_box(c), lo, hi))
+                .sum::<usize>()
+        })
+    });
+    g.bench_function(BenchmarkId::from_parameter("polycool"), |b| {
+        b.iter(|| {
+            cubics
+                .iter()
+                .map(|&c| polycool_in(black_box(c), lo, hi))
+                .sum::<usize>()
+        })
+    });
+    g.finish();
+}
+
+/// nlrt-poly, the closed form and the `roots` crate on `[lo, hi]`.
+fn bench_all_roots<T: Real + roots::FloatType>(
+    crit: &mut Criterion,
+    group: &str,
+    cubics: &[[T; 4]],
+    lo: T,
+    hi: T,
+) {
+    let mut g = crit.benchmark_group(format!("{group}/{}", T::NAME));
+    g.throughput(Throughput::Elements(cubics.len() as u64));
     g.bench_function(BenchmarkId::from_parameter("nlrt"), |b| {
         b.iter(|| {
             cubics
@@ -57,6 +111,20 @@ fn bench_type<T: Real + roots::FloatType>(crit: &mut Criterion) {
         })
     });
     g.finish();
+}
+
+fn bench_type<T: Real + roots::FloatType>(crit: &mut Criterion) {
+    let cubics = unit_cubics::<T>();
+    let (lo, hi) = (T::ZERO, T::ONE);
+
+    bench_all_roots(crit, "cubic_all_roots_in_unit", &cubics, lo, hi);
+    bench_all_roots(
+        crit,
+        "cubic_all_roots_whole_line",
+        &cubics,
+        T::NEG_INFINITY,
+        T::INFINITY,
+    );
 
     let mut g = crit.benchmark_group(format!("cubic_first_root_in_unit/{}", T::NAME));
     g.throughput(Throughput::Elements(SAMPLES as u64));
@@ -97,6 +165,15 @@ fn bench_type<T: Real + roots::FloatType>(crit: &mut Criterion) {
 
 fn benches(c: &mut Criterion) {
     bench_type::<f64>(c);
+    let cubics = unit_cubics::<f64>();
+    bench_f64_peers(c, "cubic_all_roots_in_unit", &cubics, 0.0, 1.0);
+    bench_f64_peers(
+        c,
+        "cubic_all_roots_whole_line",
+        &cubics,
+        f64::NEG_INFINITY,
+        f64::INFINITY,
+    );
     bench_type::<f32>(c);
 }
 

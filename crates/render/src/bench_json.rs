@@ -17,7 +17,7 @@
 //! where the table shows `-`.
 
 use crate::ray_stream::Replay;
-use crate::report::{ErrorStats, MethodRun, ReportOptions};
+use crate::report::{ErrorStats, MethodRun, ReportOptions, TableRow};
 use serde::Serialize;
 
 /// The commit the binary was built from (`build.rs`; `unknown` outside a git checkout).
@@ -234,9 +234,13 @@ pub fn utc_timestamp(unix_seconds: u64) -> String {
     )
 }
 
-/// The bench file's text for `rows` measured with `opts`.
+/// The bench file's text for the table `rows` measured with `opts`.
 #[must_use]
-pub fn to_json(opts: &ReportOptions, rows: &[BenchRow]) -> String {
+pub fn to_json(opts: &ReportOptions, rows: &[TableRow]) -> String {
+    let rows: Vec<BenchRow> = rows
+        .iter()
+        .map(|r| BenchRow::new(&r.scene, &r.run, r.vs_reference, r.vs_f64))
+        .collect();
     let now = std::time::SystemTime::now()
         .duration_since(std::time::UNIX_EPOCH)
         .map_or(0, |d| d.as_secs());
@@ -265,7 +269,7 @@ pub fn to_json(opts: &ReportOptions, rows: &[BenchRow]) -> String {
             threads: rayon::current_num_threads(),
             scene_size: format!("{:?}", opts.size).to_lowercase(),
         },
-        rows,
+        rows: &rows,
     };
     // Serializing plain numbers, strings and options cannot fail; NaN (a failed one-thread
     // pool) becomes null.

@@ -2,7 +2,6 @@
 //! rays), init time, memory, and error against the f64 pre-tessellated reference (hit/miss
 //! mismatches and depth error of the primary rays), with images.
 
-use crate::bench_json::BenchRow;
 use crate::image::write_png;
 use crate::integrator::{Frame, RenderOptions, render, render_recording};
 use crate::method::Method;
@@ -329,11 +328,25 @@ pub fn run(opts: &ReportOptions) -> Result<String, String> {
     run_with_rows(opts).map(|(md, _)| md)
 }
 
+/// One row of the table as data: a method's run on a scene with its errors against the
+/// reference and against its f64 partner (where they ran).
+#[derive(Clone, Debug)]
+pub struct TableRow {
+    /// Scene name.
+    pub scene: String,
+    /// The method's run.
+    pub run: MethodRun,
+    /// Against the f64 pre-tessellated reference.
+    pub vs_reference: Option<ErrorStats>,
+    /// Against the method's f64 partner.
+    pub vs_f64: Option<ErrorStats>,
+}
+
 /// [`run`], with every row of the table as data (for `nlrt bench --json`).
 ///
 /// # Errors
 /// As [`run`].
-pub fn run_with_rows(opts: &ReportOptions) -> Result<(String, Vec<BenchRow>), String> {
+pub fn run_with_rows(opts: &ReportOptions) -> Result<(String, Vec<TableRow>), String> {
     let mut md = String::new();
     let mut rows = Vec::new();
     let r = &opts.render;
@@ -406,7 +419,12 @@ pub fn run_with_rows(opts: &ReportOptions) -> Result<(String, Vec<BenchRow>), St
             let reference = run_of(m.method.reference());
             let vs = |other: Option<&MethodRun>| other.map(|o| compare(&m.frame, &o.frame));
             let (e_ref, e_64) = (vs(reference), vs(run_of(m.method.f64_partner())));
-            rows.push(BenchRow::new(name, m, e_ref, e_64));
+            rows.push(TableRow {
+                scene: name.clone(),
+                run: m.clone(),
+                vs_reference: e_ref,
+                vs_f64: e_64,
+            });
             if let Some(e) = e_ref {
                 points.push((m.method, name.clone(), m.all_mrays(), e));
             }

@@ -11,57 +11,101 @@ use std::hint::black_box;
 use std::io::IsTerminal;
 use std::time::Instant;
 
-/// A solver under test: all roots in `[lo, hi]`.
+/// A solver of all roots of a cubic in `[lo, hi]`.
+type Solver<T> = fn([T; 4], T, T) -> Roots<T>;
+
+/// A solver under test: all roots in `[lo, hi]` (`None` for a type the solver lacks).
 #[derive(Clone, Copy)]
 pub struct Method {
     /// Name in the table.
     pub name: &'static str,
-    f32: fn([f32; 4], f32, f32) -> Roots<f32>,
-    f64: fn([f64; 4], f64, f64) -> Roots<f64>,
+    f32: Option<Solver<f32>>,
+    f64: Option<Solver<f64>>,
 }
 
-fn roots_crate<T: Real + roots::FloatType>(c: [T; 4], lo: T, hi: T) -> Roots<T> {
-    let found = roots::find_roots_cubic(c[3], c[2], c[1], c[0]);
+/// The roots of `found` in `[lo, hi]`, increasing and distinct, at most three.
+fn kept_in<T: Real>(found: &[T], lo: T, hi: T) -> Roots<T> {
     let mut inside: Vec<T> = found
-        .as_ref()
         .iter()
         .copied()
         .filter(|&x| x >= lo && x <= hi)
         .collect();
+    inside.sort_by(|a, b| a.partial_cmp(b).unwrap_or(std::cmp::Ordering::Equal));
     inside.dedup();
     Roots::from_slice(&inside[..inside.len().min(3)])
 }
 
+/// `kurbo::common::solve_cubic` (f64 only; Blinn's method as in kurbo 0.13), whole line, then
+/// the roots in `[lo, hi]`.
+fn kurbo_cubic(c: [f64; 4], lo: f64, hi: f64) -> Roots<f64> {
+    kept_in(&kurbo::common::solve_cubic(c[0], c[1], c[2], c[3]), lo, hi)
+}
+
+/// Target accuracy handed to polycool's interval solver: a few ulps of 1 in f64 (its roots are
+/// judged to ulps like the others'; the looser 1e-12 of its examples would count as misses).
+const POLYCOOL_EPSILON: f64 = 1e-15;
+
+/// `polycool::Poly::roots_between` (f64 only; Yuksel's method), on `[lo, hi]`. Its interval
+/// must be finite and the cubic evaluable at its ends, so an infinite end is replaced by
+/// Cauchy's bound on the real roots, `1 + max |c_i / c_3|` (what a user of it would pass), or
+/// by `f64::MAX` where that bound is not finite.
+fn polycool_cubic(c: [f64; 4], lo: f64, hi: f64) -> Roots<f64> {
+    let cauchy = 1.0
+        + (c[0] / c[3])
+            .abs()
+            .max((c[1] / c[3]).abs())
+            .max((c[2] / c[3]).abs());
+    let bound = if cauchy.is_finite() { cauchy } else { f64::MAX };
+    let (a, b) = (lo.max(-bound), hi.min(bound));
+    let found = polycool::Poly::new(c).roots_between(a, b, POLYCOOL_EPSILON);
+    kept_in(&found, lo, hi)
+}
+
+fn roots_crate<T: Real + roots::FloatType>(c: [T; 4], lo: T, hi: T) -> Roots<T> {
+    let found = roots::find_roots_cubic(c[3], c[2], c[1], c[0]);
+    kept_in(found.as_ref(), lo, hi)
+}
+
 /// The methods compared.
-pub const METHODS: [Method; 3] = [
+pub const METHODS: [Method; 5] = [
     Method {
         name: "nlrt-poly",
-        f32: solve_cubic_in::<f32>,
-        f64: solve_cubic_in::<f64>,
+        f32: Some(solve_cubic_in::<f32>),
+        f64: Some(solve_cubic_in::<f64>),
     },
     Method {
         name: "closed form",
-        f32: solve_cubic_closed_form_in::<f32>,
-        f64: solve_cubic_closed_form_in::<f64>,
+        f32: Some(solve_cubic_closed_form_in::<f32>),
+        f64: Some(solve_cubic_closed_form_in::<f64>),
     },
     Method {
         name: "roots crate",
-        f32: roots_crate::<f32>,
-        f64: roots_crate::<f64>,
+        f32: Some(roots_crate::<f32>),
+        f64: Some(roots_crate::<f64>),
+    },
+    Method {
+        name: "kurbo",
+        f32: None,
+        f64: Some(kurbo_cubic),
+    },
+    Method {
+        name: "polycool",
+        f32: None,
+        f64: Some(polycool_cubic),
     },
 ];
 
 /// Per-type access to a method's function.
 trait Pick: Real {
-    fn pick(m: &Method) -> fn([Self; 4], Self, Self) -> Roots<Self>;
+    fn pick(m: &Method) -> Option<Solver<Self>>;
 }
 impl Pick for f32 {
-    fn pick(m: &Method) -> fn([f32; 4], f32, f32) -> Roots<f32> {
+    fn pick(m: &Method) -> Option<Solver<f32>> {
         m.f32
     }
 }
 impl Pick for f64 {
-    fn pick(m: &Method) -> fn([f64; 4], f64, f64) -> Roots<f64> {
+    fn pick(m: &Method) -> Option<Solver<f64>> {
         m.f64
     }
 }
@@ -161,9 +205,9 @@ fn family_rows<T: Pick>(family: &str, cases: &[Case<T>], opts: &Options) -> Vec<
         .collect();
     METHODS
         .iter()
-        .map(|m| {
+        .filter_map(|m| T::pick(m).map(|solve| (m, solve)))
+        .map(|(m, solve)| {
             progress(&format!("{} {family}: {}", T::NAME, m.name));
-            let solve = T::pick(m);
             let answers: Vec<Roots<T>> =
                 cases.iter().map(|c| solve(c.coeffs, c.lo, c.hi)).collect();
             // Timing: whole passes over the family, single thread, median of the passes.
