@@ -19,6 +19,7 @@ pub mod crossing;
 pub mod exact;
 pub mod families;
 pub mod measure;
+pub mod peers;
 pub mod shell;
 
 pub use exact::{ExactPoly, ROOT_BITS, RealRoot};

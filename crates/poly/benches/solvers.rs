@@ -8,6 +8,7 @@
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use nlrt_oracle::families::{RandomFamily, SplitMix64};
+use nlrt_oracle::peers;
 use nlrt_poly::baseline::solve_cubic_closed_form_in;
 use nlrt_poly::{Real, first_cubic_root_in, solve_cubic_in, solve_quadratic};
 use std::hint::black_box;
@@ -21,38 +22,6 @@ fn unit_cubics<T: Real>() -> Vec<[T; 4]> {
         .collect()
 }
 
-fn roots_crate<T: Real + roots::FloatType>(c: [T; 4], lo: T, hi: T) -> usize {
-    roots::find_roots_cubic(c[3], c[2], c[1], c[0])
-        .as_ref()
-        .iter()
-        .filter(|&&x| x >= lo && x <= hi)
-        .count()
-}
-
-/// Target accuracy for polycool (see `nlrt solvers`).
-const POLYCOOL_EPSILON: f64 = 1e-15;
-
-fn kurbo_in(c: [f64; 4], lo: f64, hi: f64) -> usize {
-    kurbo::common::solve_cubic(c[0], c[1], c[2], c[3])
-        .iter()
-        .filter(|&&x| x >= lo && x <= hi)
-        .count()
-}
-
-/// On `[lo, hi]`, infinite ends replaced by Cauchy's root bound (as `nlrt solvers` does).
-fn polycool_in(c: [f64; 4], lo: f64, hi: f64) -> usize {
-    let cauchy = 1.0
-        + (c[0] / c[3])
-            .abs()
-            .max((c[1] / c[3]).abs())
-            .max((c[2] / c[3]).abs());
-    let bound = if cauchy.is_finite() { cauchy } else { f64::MAX };
-    let (a, b) = (lo.max(-bound), hi.min(bound));
-    polycool::Poly::new(c)
-        .roots_between(a, b, POLYCOOL_EPSILON)
-        .len()
-}
-
 /// The f64-only peers on the same cubics, on `[lo, hi]`.
 fn bench_f64_peers(crit: &mut Criterion, group: &str, cubics: &[[f64; 4]], lo: f64, hi: f64) {
     let mut g = crit.benchmark_group(format!("{group}/f64"));
@@ -61,7 +30,7 @@ fn bench_f64_peers(crit: &mut Criterion, group: &str, cubics: &[[f64; 4]], lo: f
         b.iter(|| {
             cubics
                 .iter()
-                .map(|&c| kurbo_in(black_box(c), lo, hi))
+                .map(|&c| peers::kurbo_cubic(black_box(c), lo, hi).len())
                 .sum::<usize>()
         })
     });
@@ -69,7 +38,7 @@ fn bench_f64_peers(crit: &mut Criterion, group: &str, cubics: &[[f64; 4]], lo: f
         b.iter(|| {
             cubics
                 .iter()
-                .map(|&c| polycool_in(black_box(c), lo, hi))
+                .map(|&c| peers::polycool_cubic(black_box(c), lo, hi).len())
                 .sum::<usize>()
         })
     });
@@ -106,7 +75,7 @@ fn bench_all_roots<T: Real + roots::FloatType>(
         b.iter(|| {
             cubics
                 .iter()
-                .map(|&c| roots_crate(black_box(c), lo, hi))
+                .map(|&c| peers::roots_crate_cubic(black_box(c), lo, hi).len())
                 .sum::<usize>()
         })
     });

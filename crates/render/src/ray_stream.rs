@@ -106,14 +106,19 @@ const CHUNK: usize = 256;
 /// rayon pool, in chunks of consecutive rays; times the tracing alone.
 #[must_use]
 pub fn replay(tracer: &dyn Tracer, stream: &RayStream, kind: Option<RayKind>) -> Replay {
-    let rays: Vec<StreamRay> = match kind {
-        Some(k) => stream
-            .rays
-            .iter()
-            .copied()
-            .filter(|r| r.kind == k)
-            .collect(),
-        None => stream.rays.clone(),
+    // Only a subset is copied (before the clock starts); every ray is traced in place.
+    let subset: Vec<StreamRay>;
+    let rays: &[StreamRay] = match kind {
+        Some(k) => {
+            subset = stream
+                .rays
+                .iter()
+                .copied()
+                .filter(|r| r.kind == k)
+                .collect();
+            &subset
+        }
+        None => &stream.rays,
     };
     let start = std::time::Instant::now();
     let hits: u64 = rays

@@ -181,17 +181,8 @@ fn run_scene_with_stream(
                 render_recording(scene, tracer.as_ref(), &opts.render).1,
             ))
         });
-    let one_thread = |f: &(dyn Fn() -> Replay + Sync)| {
-        let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build();
-        pool.map_or(
-            Replay {
-                rays: 0,
-                hits: 0,
-                seconds: f64::NAN,
-            },
-            |pool| pool.install(f),
-        )
-    };
+    // One single-thread pool for every 1-thread measurement of the scene (renders, replays).
+    let one_thread = rayon::ThreadPoolBuilder::new().num_threads(1).build().ok();
     let runs = opts
         .methods
         .iter()
@@ -207,8 +198,7 @@ fn run_scene_with_stream(
                 &progress_printer(label, opts.render.height),
             );
             let one_thread_seconds = opts.scaling.then(|| {
-                let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build();
-                pool.map_or(f64::NAN, |pool| {
+                one_thread.as_ref().map_or(f64::NAN, |pool| {
                     pool.install(|| render(scene, tracer.as_ref(), &opts.render, &|_| {}).seconds)
                 })
             });
@@ -217,7 +207,14 @@ fn run_scene_with_stream(
                 StreamTimes {
                     all: replay(tracer, stream, None),
                     primary: replay(tracer, stream, Some(RayKind::Primary)),
-                    all_one_thread: one_thread(&|| replay(tracer, stream, None)),
+                    all_one_thread: one_thread.as_ref().map_or(
+                        Replay {
+                            rays: 0,
+                            hits: 0,
+                            seconds: f64::NAN,
+                        },
+                        |pool| pool.install(|| replay(tracer, stream, None)),
+                    ),
                 }
             });
             MethodRun {

@@ -2,7 +2,7 @@
 //! families and the named hard families, judged by the MPFR oracle.
 
 use nlrt_oracle::families::{Case, RandomFamily, SplitMix64, hard_cubics};
-use nlrt_oracle::{Tolerance, Truth, Verdict};
+use nlrt_oracle::{Tolerance, Truth, Verdict, peers};
 use nlrt_poly::baseline::solve_cubic_closed_form_in;
 use nlrt_poly::{Real, Roots, solve_cubic_in};
 use rayon::prelude::*;
@@ -23,49 +23,6 @@ pub struct Method {
     f64: Option<Solver<f64>>,
 }
 
-/// The roots of `found` in `[lo, hi]`, increasing and distinct, at most three.
-fn kept_in<T: Real>(found: &[T], lo: T, hi: T) -> Roots<T> {
-    let mut inside: Vec<T> = found
-        .iter()
-        .copied()
-        .filter(|&x| x >= lo && x <= hi)
-        .collect();
-    inside.sort_by(|a, b| a.partial_cmp(b).unwrap_or(std::cmp::Ordering::Equal));
-    inside.dedup();
-    Roots::from_slice(&inside[..inside.len().min(3)])
-}
-
-/// `kurbo::common::solve_cubic` (f64 only; Blinn's method as in kurbo 0.13), whole line, then
-/// the roots in `[lo, hi]`.
-fn kurbo_cubic(c: [f64; 4], lo: f64, hi: f64) -> Roots<f64> {
-    kept_in(&kurbo::common::solve_cubic(c[0], c[1], c[2], c[3]), lo, hi)
-}
-
-/// Target accuracy handed to polycool's interval solver: a few ulps of 1 in f64 (its roots are
-/// judged to ulps like the others'; the looser 1e-12 of its examples would count as misses).
-const POLYCOOL_EPSILON: f64 = 1e-15;
-
-/// `polycool::Poly::roots_between` (f64 only; Yuksel's method), on `[lo, hi]`. Its interval
-/// must be finite and the cubic evaluable at its ends, so an infinite end is replaced by
-/// Cauchy's bound on the real roots, `1 + max |c_i / c_3|` (what a user of it would pass), or
-/// by `f64::MAX` where that bound is not finite.
-fn polycool_cubic(c: [f64; 4], lo: f64, hi: f64) -> Roots<f64> {
-    let cauchy = 1.0
-        + (c[0] / c[3])
-            .abs()
-            .max((c[1] / c[3]).abs())
-            .max((c[2] / c[3]).abs());
-    let bound = if cauchy.is_finite() { cauchy } else { f64::MAX };
-    let (a, b) = (lo.max(-bound), hi.min(bound));
-    let found = polycool::Poly::new(c).roots_between(a, b, POLYCOOL_EPSILON);
-    kept_in(&found, lo, hi)
-}
-
-fn roots_crate<T: Real + roots::FloatType>(c: [T; 4], lo: T, hi: T) -> Roots<T> {
-    let found = roots::find_roots_cubic(c[3], c[2], c[1], c[0]);
-    kept_in(found.as_ref(), lo, hi)
-}
-
 /// The methods compared.
 pub const METHODS: [Method; 5] = [
     Method {
@@ -80,18 +37,18 @@ pub const METHODS: [Method; 5] = [
     },
     Method {
         name: "roots crate",
-        f32: Some(roots_crate::<f32>),
-        f64: Some(roots_crate::<f64>),
+        f32: Some(peers::roots_crate_cubic::<f32>),
+        f64: Some(peers::roots_crate_cubic::<f64>),
     },
     Method {
         name: "kurbo",
         f32: None,
-        f64: Some(kurbo_cubic),
+        f64: Some(peers::kurbo_cubic),
     },
     Method {
         name: "polycool",
         f32: None,
-        f64: Some(polycool_cubic),
+        f64: Some(peers::polycool_cubic),
     },
 ];
 
