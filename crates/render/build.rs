@@ -20,12 +20,23 @@ fn main() {
         commit.as_deref().unwrap_or("unknown")
     );
     println!("cargo:rustc-env=NLRT_DIRTY={dirty}");
-    // A new commit moves HEAD (or the branch it names); staging changes the index.
-    for path in [
-        "../../.git/HEAD",
-        "../../.git/index",
-        "../../.git/refs/heads",
-    ] {
+    // Rerun when the answer can change: a commit moves the branch HEAD names (or HEAD
+    // itself), staging rewrites the index, and an edit of any tracked source changes the
+    // dirty flag (cargo scans these directories for changed files).
+    let mut watched = vec![
+        "../../.git/HEAD".to_string(),
+        "../../.git/index".to_string(),
+        "../../crates".to_string(),
+        "../../tests".to_string(),
+        "../../Cargo.toml".to_string(),
+    ];
+    if let Some(branch) = std::fs::read_to_string("../../.git/HEAD")
+        .ok()
+        .and_then(|h| h.strip_prefix("ref: ").map(|r| r.trim().to_string()))
+    {
+        watched.push(format!("../../.git/{branch}"));
+    }
+    for path in watched {
         println!("cargo:rerun-if-changed={path}");
     }
 }

@@ -10,7 +10,7 @@ use nlrt_render::report::{self, ReportOptions};
 use nlrt_render::scenes::{self, SCENE_NAMES, Size};
 use nlrt_render::watertight;
 use nlrt_render::{edit, solvers};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::ExitCode;
 
 #[derive(Parser)]
@@ -521,12 +521,14 @@ fn main() -> ExitCode {
                 return fail("bench", e);
             }
             // Opened before the run, so that an unwritable path fails at once, not after it.
-            let json_file = match json.as_ref().map(std::fs::File::create).transpose() {
+            let json_file = json.as_deref().map(|path| {
+                std::fs::File::create(path)
+                    .map(|file| (path, file))
+                    .map_err(|e| format!("cannot write {}: {e}", path.display()))
+            });
+            let json_file = match json_file.transpose() {
                 Ok(f) => f,
-                Err(e) => {
-                    let path = json.as_deref().unwrap_or(Path::new("")).display();
-                    return fail("bench", format!("cannot write {path}: {e}"));
-                }
+                Err(e) => return fail("bench", e),
             };
             let methods = Method::ALL
                 .into_iter()
@@ -545,7 +547,7 @@ fn main() -> ExitCode {
             match report::run_with_rows(&opts) {
                 Ok((md, rows)) => {
                     print!("{md}");
-                    if let (Some(mut file), Some(path)) = (json_file, json.as_ref()) {
+                    if let Some((path, mut file)) = json_file {
                         use std::io::Write as _;
                         let text = nlrt_render::bench_json::to_json(&opts, &rows);
                         if let Err(e) = file.write_all(text.as_bytes()) {
