@@ -12,7 +12,8 @@ use nlrt_shellmap::{
 use crate::bvh::{Aabb, Bvh4};
 use crate::cells::{CURVE_STACK, walk_cells};
 use crate::heightfield::{HEIGHT_ONE, HeightField};
-use crate::mesh::BaseMesh;
+use crate::mesh::{BaseMesh, MeshError};
+use crate::pose::{PoseUpdate, TlasUpdate};
 use crate::stats::TraversalStats;
 use crate::tlas::{MAX_TEXEL_COORDINATE, PrismTlas, RootNodes, SetupError};
 
@@ -126,6 +127,40 @@ impl<T: Real> DisplacedSurface<T> {
     #[must_use]
     pub fn tlas(&self) -> &Bvh4<T> {
         &self.prisms.tlas
+    }
+
+    /// Moves the base mesh to a new pose (an animation frame: new vertex positions and
+    /// normals, the same triangles and uvs) and updates the TLAS by `update`. The height
+    /// field, its pyramid and the triangles' root nodes do not depend on the pose and stay
+    /// as they are. Hits afterwards are those of a surface built afresh on the posed mesh.
+    ///
+    /// # Errors
+    /// Another vertex count than the mesh's, or a NaN or infinite value (the surface is then
+    /// unchanged).
+    ///
+    /// ```
+    /// use nlrt_accel::{BaseMesh, DisplacedSurface, HeightField, TlasUpdate, TraversalStats, Wrap};
+    /// use nlrt_poly::glam::{DVec2, DVec3};
+    /// use nlrt_shellmap::Ray;
+    /// let p = vec![DVec3::ZERO, DVec3::X, DVec3::new(1.0, 1.0, 0.0), DVec3::Y];
+    /// let uv = p.iter().map(|p| DVec2::new(p.x, p.y)).collect();
+    /// let mesh = BaseMesh::new(p.clone(), vec![DVec3::Z; 4], uv, vec![[0, 1, 2], [0, 2, 3]]).unwrap();
+    /// let field = HeightField::new(4, vec![u16::MAX; 16], Wrap::Repeat).unwrap();
+    /// let mut surface = DisplacedSurface::new(mesh, field, 0.5, 1.0).unwrap();
+    /// // The next frame: the square lifted by 1.
+    /// let lifted: Vec<DVec3> = p.iter().map(|p| *p + DVec3::Z).collect();
+    /// surface.set_pose(&lifted, &[DVec3::Z; 4], TlasUpdate::DEFAULT).unwrap();
+    /// let ray = Ray::new(DVec3::new(0.3, 0.6, 3.0), -DVec3::Z).unwrap();
+    /// let hit = surface.intersect(&ray, 0.0, f64::INFINITY, &mut TraversalStats::default()).unwrap();
+    /// assert!((hit.hit.t - 1.5).abs() < 1e-12);
+    /// ```
+    pub fn set_pose(
+        &mut self,
+        positions: &[T::Vec3],
+        normals: &[T::Vec3],
+        update: TlasUpdate,
+    ) -> Result<PoseUpdate, MeshError> {
+        self.prisms.set_pose(positions, normals, update)
     }
 
     /// Root nodes of triangle `i`.

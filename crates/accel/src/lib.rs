@@ -11,6 +11,8 @@
 //!   texel discard, nearest-first order, range reduction, flat-texel shortcut).
 //! - [`ShellSurface`]: an object in texture space ([`ShellObject`], with its own BVH)
 //!   tiled over the base mesh: TLAS + implicit quadtree over tiles + the object's BVH.
+//! - Animated base meshes: `set_pose` on either surface moves the mesh and refits or
+//!   rebuilds only the TLAS ([`TlasUpdate`]); the texture-space data stays untouched.
 //!
 //! ```
 //! use nlrt_accel::{BaseMesh, DisplacedSurface, HeightField, TraversalStats, Wrap};
@@ -42,6 +44,7 @@ mod cells;
 mod displacement;
 mod heightfield;
 mod mesh;
+mod pose;
 mod shell;
 mod stats;
 mod tlas;
@@ -51,6 +54,7 @@ pub use cells::{CellTriangle, traverse_cells, uv_in_cells};
 pub use displacement::{DisplacedSurface, DisplacementError, SurfaceHit, TexelPart};
 pub use heightfield::{HEIGHT_ONE, HeightField, HeightMapError, Wrap};
 pub use mesh::{BaseMesh, MeshError, prism_bounds};
+pub use pose::{PoseUpdate, TlasUpdate};
 pub use shell::{ShellError, ShellHit, ShellObject, ShellSurface};
 pub use stats::TraversalStats;
 pub use tlas::{MAX_TEXEL_COORDINATE, RootNodes};

@@ -36,6 +36,15 @@ pub enum MeshError {
     },
     /// No triangles.
     Empty,
+    /// A new pose ([`BaseMesh::set_pose`]) has another vertex count than the mesh.
+    PoseVertexCount {
+        /// Vertices of the mesh.
+        vertices: usize,
+        /// Positions in the pose.
+        positions: usize,
+        /// Normals in the pose.
+        normals: usize,
+    },
 }
 
 impl fmt::Display for MeshError {
@@ -59,6 +68,14 @@ impl fmt::Display for MeshError {
                 write!(f, "vertex {vertex} has a NaN or infinite {attribute}")
             }
             Self::Empty => write!(f, "the mesh has no triangles"),
+            Self::PoseVertexCount {
+                vertices,
+                positions,
+                normals,
+            } => write!(
+                f,
+                "a pose of this mesh needs {vertices} positions and normals, not {positions} and {normals}"
+            ),
         }
     }
 }
@@ -100,18 +117,15 @@ impl<T: Real> BaseMesh<T> {
                 return Err(MeshError::IndexOutOfRange { triangle: t, index });
             }
         }
-        let finite3 = |v: T::Vec3| v.x().is_finite() && v.y().is_finite() && v.z().is_finite();
-        for vertex in 0..positions.len() {
-            let attribute = if !finite3(positions[vertex]) {
-                "position"
-            } else if !finite3(normals[vertex]) {
-                "normal"
-            } else if !(uvs[vertex].x().is_finite() && uvs[vertex].y().is_finite()) {
-                "uv"
-            } else {
-                continue;
-            };
-            return Err(MeshError::NotFinite { vertex, attribute });
+        check_finite::<T>(&positions, &normals)?;
+        if let Some(vertex) = uvs
+            .iter()
+            .position(|uv| !(uv.x().is_finite() && uv.y().is_finite()))
+        {
+            return Err(MeshError::NotFinite {
+                vertex,
+                attribute: "uv",
+            });
         }
         Ok(Self {
             positions,
@@ -119,6 +133,31 @@ impl<T: Real> BaseMesh<T> {
             uvs,
             triangles,
         })
+    }
+
+    /// Moves the vertices to a new pose (an animation frame): new positions and normals, the
+    /// same triangles and texture coordinates. The mesh is unchanged when the pose is
+    /// rejected. Degenerate poses (collapsed or inverted triangles, zero normals) are
+    /// accepted, as in [`BaseMesh::new`].
+    ///
+    /// # Errors
+    /// Another vertex count than the mesh's, or a NaN or infinite value.
+    pub fn set_pose(
+        &mut self,
+        positions: &[T::Vec3],
+        normals: &[T::Vec3],
+    ) -> Result<(), MeshError> {
+        if positions.len() != self.positions.len() || normals.len() != self.positions.len() {
+            return Err(MeshError::PoseVertexCount {
+                vertices: self.positions.len(),
+                positions: positions.len(),
+                normals: normals.len(),
+            });
+        }
+        check_finite::<T>(positions, normals)?;
+        self.positions.copy_from_slice(positions);
+        self.normals.copy_from_slice(normals);
+        Ok(())
     }
 
     /// Triangles.
@@ -178,6 +217,22 @@ impl<T: Real> BaseMesh<T> {
             * (2 * core::mem::size_of::<T::Vec3>() + core::mem::size_of::<T::Vec2>())
             + self.triangles.len() * 12
     }
+}
+
+/// The first vertex whose position or normal is NaN or infinite, as an error.
+fn check_finite<T: Real>(positions: &[T::Vec3], normals: &[T::Vec3]) -> Result<(), MeshError> {
+    let finite3 = |v: &T::Vec3| v.x().is_finite() && v.y().is_finite() && v.z().is_finite();
+    for (vertex, (p, n)) in positions.iter().zip(normals).enumerate() {
+        let attribute = if !finite3(p) {
+            "position"
+        } else if !finite3(n) {
+            "normal"
+        } else {
+            continue;
+        };
+        return Err(MeshError::NotFinite { vertex, attribute });
+    }
+    Ok(())
 }
 
 /// The box of a prism: its six corners `P_i` and `P_i + N_i` (every side is a bilinear patch

@@ -14,7 +14,8 @@ use nlrt_shellmap::{
 
 use crate::bvh::{Aabb, Bvh4};
 use crate::cells::{CURVE_STACK, walk_cells};
-use crate::mesh::BaseMesh;
+use crate::mesh::{BaseMesh, MeshError};
+use crate::pose::{PoseUpdate, TlasUpdate};
 use crate::stats::TraversalStats;
 use crate::tlas::{MAX_TEXEL_COORDINATE, PrismTlas, RootNodes, SetupError};
 
@@ -185,6 +186,30 @@ impl<T: Real> ShellSurface<T> {
     #[must_use]
     pub fn prism(&self, i: usize) -> Prism<T> {
         self.prisms.prism(i)
+    }
+
+    /// Moves the base mesh to a new pose and updates the TLAS, as
+    /// [`DisplacedSurface::set_pose`]: the object, its BVH and the root tiles stay as they
+    /// are.
+    ///
+    /// # Errors
+    /// Another vertex count than the mesh's, or a NaN or infinite value (the surface is then
+    /// unchanged).
+    ///
+    /// [`DisplacedSurface::set_pose`]: crate::DisplacedSurface::set_pose
+    pub fn set_pose(
+        &mut self,
+        positions: &[T::Vec3],
+        normals: &[T::Vec3],
+        update: TlasUpdate,
+    ) -> Result<PoseUpdate, MeshError> {
+        self.prisms.set_pose(positions, normals, update)
+    }
+
+    /// The TLAS.
+    #[must_use]
+    pub fn tlas(&self) -> &Bvh4<T> {
+        &self.prisms.tlas
     }
 
     /// TLAS traversal over the prisms, as [`DisplacedSurface::traverse_prisms`]

@@ -74,6 +74,8 @@ pub(crate) struct PrismTlas<T: Real> {
     tiling: T,
     roots: Vec<RootNodes>,
     pub(crate) tlas: Bvh4<T>,
+    /// The TLAS's SAH cost right after its last build ([`crate::TlasUpdate::Auto`]).
+    pub(crate) sah_cost_at_build: f64,
 }
 
 impl<T: Real> PrismTlas<T> {
@@ -119,6 +121,7 @@ impl<T: Real> PrismTlas<T> {
             height_scale,
             tiling,
             roots,
+            sah_cost_at_build: tlas.sah_cost(),
             tlas,
         })
     }
