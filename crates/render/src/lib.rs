@@ -18,12 +18,15 @@
 //!
 //! Around them: the built-in scenes ([`scenes`]) and scene files ([`scene_file`]), the
 //! speed-against-error report ([`report`], plots in [`plot`]), watertightness against the
-//! MPFR oracle ([`watertight`]), height-map edits ([`edit`]), the solver report
+//! MPFR oracle ([`watertight`]), height-map edits ([`edit`]), animated base meshes
+//! ([`animation`], [`animate`]), the solver report
 //! ([`solvers`]) and image output ([`image`]).
 
 // `!(a > b)` is deliberate: it is true when either side is NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+pub mod animate;
+pub mod animation;
 pub mod bench_json;
 pub mod edit;
 #[cfg(feature = "embree")]

@@ -104,6 +104,21 @@ fn parse_method(s: &str) -> Result<Method, String> {
     })
 }
 
+fn parse_deformation(s: &str) -> Result<nlrt_render::animation::Deformation, String> {
+    nlrt_render::animation::Deformation::from_name(s)
+}
+
+/// `--tlas`: how nonlinear tracing's TLAS follows a pose.
+#[derive(Clone, Copy, Debug, ValueEnum)]
+enum TlasRule {
+    /// Refit, rebuild when the SAH cost has grown past the default rule's factor.
+    Auto,
+    /// Refit every frame.
+    Refit,
+    /// Rebuild every frame.
+    Rebuild,
+}
+
 fn parse_size(s: &str) -> Result<(usize, usize), String> {
     let (w, h) = s
         .split_once(['x', 'X'])
@@ -244,6 +259,42 @@ enum Command {
         /// Skip the pre-tessellated rebuild (at paper size it needs several GB).
         #[arg(long)]
         no_reference: bool,
+    },
+    /// Animate a scene's base mesh: per frame, nonlinear tracing refits (or rebuilds) only its
+    /// TLAS; every other method is built afresh on the posed mesh. Writes the frames and
+    /// `animate.md` (update and render times, checks against fresh builds).
+    Animate {
+        #[arg(help = scene_help("A built-in scene (each has a motion)"))]
+        scene: String,
+        /// Frames (one cycle of a deformation).
+        #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..=100_000))]
+        frames: u32,
+        #[command(flatten)]
+        args: RenderArgs,
+        /// Methods (comma-separated slugs; default nonlinear-f32,nonlinear-f64,tessellated).
+        #[arg(long, value_delimiter = ',', value_parser = parse_method)]
+        methods: Vec<Method>,
+        /// How nonlinear tracing's TLAS follows each pose: refit, rebuild, or auto (refit,
+        /// rebuilt when its SAH cost has grown by the default rule's factor).
+        #[arg(long, value_enum, default_value = "auto")]
+        tlas: TlasRule,
+        /// Replace the scene's motion by this deformation of its base mesh (wave, bend,
+        /// twist, breathe, squash).
+        #[arg(long, value_parser = parse_deformation)]
+        deformation: Option<nlrt_render::animation::Deformation>,
+        /// Strength of `--deformation` (1 the built-in one; |amplitude| <= 10).
+        #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
+        amplitude: f64,
+        /// Frames rendered by the methods built afresh per frame (the pre-tessellated
+        /// reference, Embree): their rebuild does not depend on the pose.
+        #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u32).range(1..=100_000))]
+        rebuild_frames: u32,
+        /// Do not build nonlinear tracing afresh each frame to compare hits and speed with.
+        #[arg(long)]
+        no_verify: bool,
+        /// Output directory (frames `<scene>-<method>-<frame>.png`, `animate.md`).
+        #[arg(short, long, default_value = "nlrt-animate")]
+        output: PathBuf,
     },
     /// Write a built-in scene as a scene file (TOML + OBJ + 16-bit PNG or object OBJ).
     Export {
@@ -408,6 +459,69 @@ fn report_command(output: PathBuf, args: &RenderArgs, solver_samples: usize) -> 
     }
     print!("{md}");
     eprintln!("report written to {}", path.display());
+    ExitCode::SUCCESS
+}
+
+#[allow(clippy::too_many_arguments)]
+fn animate_command(
+    scene: &str,
+    frames: usize,
+    args: &RenderArgs,
+    methods: Vec<Method>,
+    tlas: TlasRule,
+    deformation: Option<nlrt_render::animation::Deformation>,
+    amplitude: f64,
+    rebuild_frames: usize,
+    verify: bool,
+    output: PathBuf,
+) -> ExitCode {
+    use nlrt_render::animate::{self, AnimateOptions};
+    use nlrt_render::animation::Motion;
+    let mut built = match resolve_scene(scene, args.scene_size.into()) {
+        Ok(s) => s,
+        Err(e) => return fail("animate", e),
+    };
+    if !(amplitude.is_finite() && amplitude.abs() <= 10.0) {
+        return fail(
+            "animate",
+            format!("--amplitude {amplitude} is out of range (|amplitude| <= 10)"),
+        );
+    }
+    if let Some(deformation) = deformation {
+        built.motion = Motion::Deform {
+            deformation,
+            amplitude,
+        };
+    }
+    let defaults = AnimateOptions::default();
+    let opts = AnimateOptions {
+        frames,
+        render: args.options(),
+        methods: if methods.is_empty() {
+            defaults.methods
+        } else {
+            methods
+        },
+        update: match tlas {
+            TlasRule::Auto => nlrt_accel::TlasUpdate::DEFAULT,
+            TlasRule::Refit => nlrt_accel::TlasUpdate::Refit,
+            TlasRule::Rebuild => nlrt_accel::TlasUpdate::Rebuild,
+        },
+        rebuild_frames,
+        verify,
+        out_dir: Some(output.clone()),
+    };
+    let report = match animate::run(&built, &opts) {
+        Ok(r) => r,
+        Err(e) => return fail("animate", format!("{scene}: {e}")),
+    };
+    let md = format!("# nlrt animate {scene}\n\n{}", animate::markdown(&report));
+    let path = output.join("animate.md");
+    if let Err(e) = std::fs::write(&path, &md) {
+        return fail("animate", format!("cannot write {}: {e}", path.display()));
+    }
+    print!("{md}");
+    eprintln!("frames and animate.md written to {}", output.display());
     ExitCode::SUCCESS
 }
 
@@ -584,6 +698,29 @@ fn main() -> ExitCode {
                 Err(e) => fail("edit", e),
             }
         }
+        Command::Animate {
+            scene,
+            frames,
+            args,
+            methods,
+            tlas,
+            deformation,
+            amplitude,
+            rebuild_frames,
+            no_verify,
+            output,
+        } => animate_command(
+            &scene,
+            frames as usize,
+            &args,
+            methods,
+            tlas,
+            deformation,
+            amplitude,
+            rebuild_frames as usize,
+            !no_verify,
+            output,
+        ),
         Command::Export {
             scene,
             scene_size,

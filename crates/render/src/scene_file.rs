@@ -22,7 +22,19 @@
 //!
 //! For shell mapping, `[shell]` with `object = "object.obj"` (vertices `(x, y, z)` read as
 //! `(u, v, h)` in `[0, 1]^3`), `height_scale` and `tiling` replaces `[displacement]`.
+//!
+//! An optional `[animation]` section makes the base mesh move in `nlrt animate`, by one of:
+//!
+//! ```toml
+//! [animation]
+//! frames = ["walk_000.obj", "walk_001.obj"]  # poses: the base mesh's vertices, triangles
+//!                                            # and uvs, moved (normals computed if absent)
+//! # or
+//! deformation = "bend"   # wave, bend, twist, breathe, squash (of the base mesh, y up)
+//! amplitude = 1.0        # optional
+//! ```
 
+use crate::animation::{Deformation, Motion, Pose};
 use crate::material::Material;
 use crate::scenes::{Camera, Content, Scene};
 use nlrt_accel::{HeightField, Wrap};
@@ -37,7 +49,20 @@ struct File {
     displacement: Option<DisplacementSection>,
     shell: Option<ShellSection>,
     camera: CameraSection,
+    animation: Option<AnimationSection>,
 }
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct AnimationSection {
+    frames: Option<Vec<PathBuf>>,
+    deformation: Option<String>,
+    amplitude: Option<f64>,
+}
+
+/// The most pose files an `[animation]` may name: each is a full copy of the base mesh in
+/// memory, and 10,000 frames is over five minutes at 30 frames per second.
+pub const MAX_POSE_FILES: usize = 10_000;
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -231,6 +256,10 @@ pub fn load_from(path: &Path, source: &Source<'_>) -> Result<Scene, String> {
         ));
     }
     let sun = (sun / largest).normalize();
+    let motion = match &file.animation {
+        None => Motion::Static,
+        Some(a) => load_motion(path, a, &dir, source, (&positions, &uvs, &triangles))?,
+    };
     let scene = Scene {
         name: "file",
         positions,
@@ -250,6 +279,7 @@ pub fn load_from(path: &Path, source: &Source<'_>) -> Result<Scene, String> {
             MaterialName::Diffuse => Material::Diffuse,
             MaterialName::Glossy => Material::GLOSSY,
         },
+        motion,
     };
     // Mesh values, height scale and tiling as the tracers will see them in f64 (f32 is
     // checked when an f32 method is asked for).
@@ -260,6 +290,78 @@ pub fn load_from(path: &Path, source: &Source<'_>) -> Result<Scene, String> {
 }
 
 type ObjData = (Vec<DVec3>, Vec<DVec3>, Vec<DVec2>, Vec<[u32; 3]>);
+
+/// The motion of an `[animation]` section; `rest` is the base mesh's positions, uvs and
+/// triangles, which every pose file must match (but for its positions and normals).
+fn load_motion(
+    path: &Path,
+    a: &AnimationSection,
+    dir: &Path,
+    source: &Source<'_>,
+    rest: (&[DVec3], &[DVec2], &[[u32; 3]]),
+) -> Result<Motion, String> {
+    let err = |m: String| format!("{}: [animation] {m}", path.display());
+    match (&a.frames, &a.deformation) {
+        (Some(frames), None) => {
+            if a.amplitude.is_some() {
+                return Err(err(
+                    "amplitude belongs to a deformation, not to frames".into()
+                ));
+            }
+            if frames.is_empty() || frames.len() > MAX_POSE_FILES {
+                return Err(err(format!(
+                    "frames names {} files; between 1 and {MAX_POSE_FILES} are accepted",
+                    frames.len()
+                )));
+            }
+            let mut poses = Vec::with_capacity(frames.len());
+            for f in frames {
+                let frame_path = dir.join(f);
+                let (p, n, uv, t) = load_obj(&frame_path, source, true)?;
+                let what = if p.len() != rest.0.len() {
+                    Some(format!(
+                        "{} vertices, the base mesh {}",
+                        p.len(),
+                        rest.0.len()
+                    ))
+                } else if t.as_slice() != rest.2 {
+                    Some("other triangles than the base mesh".into())
+                } else if uv.as_slice() != rest.1 {
+                    Some("other texture coordinates than the base mesh".into())
+                } else {
+                    None
+                };
+                if let Some(what) = what {
+                    return Err(format!(
+                        "{}: a pose must have the base mesh's vertices, triangles and uvs; it has {what}",
+                        frame_path.display()
+                    ));
+                }
+                poses.push(Pose {
+                    positions: p,
+                    normals: n,
+                });
+            }
+            Ok(Motion::Frames(poses.into()))
+        }
+        (None, Some(name)) => {
+            let deformation = Deformation::from_name(name).map_err(err)?;
+            let amplitude = a.amplitude.unwrap_or(1.0);
+            // Beyond 10 every deformation folds the mesh through itself many times over: not
+            // an animation anyone means.
+            if !(amplitude.is_finite() && amplitude.abs() <= 10.0) {
+                return Err(err(format!(
+                    "amplitude = {amplitude} is out of range (|amplitude| <= 10)"
+                )));
+            }
+            Ok(Motion::Deform {
+                deformation,
+                amplitude,
+            })
+        }
+        _ => Err(err("give exactly one of frames and deformation".into())),
+    }
+}
 
 /// An OBJ as one mesh (all models merged). With `base`, texture coordinates are required and
 /// normals computed (area-weighted) when absent.
@@ -564,8 +666,19 @@ pub fn export(scene: &Scene, dir: &Path) -> Result<PathBuf, String> {
         Material::Diffuse => "",
         Material::Glossy { .. } => "material = \"glossy\"\n",
     };
+    let animation = match &scene.motion {
+        Motion::Deform {
+            deformation,
+            amplitude,
+        } => format!(
+            "\n[animation]\ndeformation = \"{}\"\namplitude = {amplitude}\n",
+            deformation.name()
+        ),
+        // Poses read from files are not written back; a static scene has none.
+        Motion::Frames(_) | Motion::Static => String::new(),
+    };
     let toml = format!(
-        "# The built-in scene '{name}', exported by `nlrt export {name}`.\n\n[mesh]\nobj = \"{name}.obj\"\n{material}\n{content}\n[camera]\neye = [{}, {}, {}]\ntarget = [{}, {}, {}]\nfov_degrees = {}\nsun = [{}, {}, {}]\n",
+        "# The built-in scene '{name}', exported by `nlrt export {name}`.\n\n[mesh]\nobj = \"{name}.obj\"\n{material}\n{content}{animation}\n[camera]\neye = [{}, {}, {}]\ntarget = [{}, {}, {}]\nfov_degrees = {}\nsun = [{}, {}, {}]\n",
         c.eye.x,
         c.eye.y,
         c.eye.z,

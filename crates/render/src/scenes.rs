@@ -2,6 +2,7 @@
 //! (nothing is downloaded). Each is a base mesh with normals and uvs, a height map, a height
 //! scale, a tiling and a camera.
 
+use crate::animation::{Deformation, Motion, Pose};
 use crate::material::Material;
 use nlrt_accel::{BaseMesh, DisplacedSurface, HeightField, ShellObject, ShellSurface, Wrap};
 use nlrt_poly::glam::{DVec2, DVec3};
@@ -33,6 +34,8 @@ pub struct Scene {
     pub sun: DVec3,
     /// The surface's material.
     pub material: Material,
+    /// How the base mesh moves in `nlrt animate` (every built-in scene has a motion).
+    pub motion: Motion,
 }
 
 /// What fills a scene's shell.
@@ -283,6 +286,7 @@ pub fn mountain(side: usize) -> Scene {
         },
         sun: DVec3::new(0.5, 0.7, 0.3).normalize(),
         material: Material::Diffuse,
+        motion: Motion::deform(Deformation::Wave),
     }
 }
 
@@ -348,6 +352,7 @@ pub fn cylinder(side: usize) -> Scene {
         },
         sun: DVec3::new(-0.4, 0.6, 0.7).normalize(),
         material: Material::Diffuse,
+        motion: Motion::deform(Deformation::Bend),
     }
 }
 
@@ -374,6 +379,7 @@ pub fn fur(side: usize) -> Scene {
         },
         sun: DVec3::new(0.3, 0.8, 0.5).normalize(),
         material: Material::Diffuse,
+        motion: Motion::deform(Deformation::Breathe),
     }
 }
 
@@ -456,6 +462,39 @@ impl Scene {
                 T::NAME
             )
         })
+    }
+
+    /// The pose of frame `frame` of `frames` by the scene's [`Motion`] (frame 0 of a
+    /// deformation is the rest pose); `None` for a static scene.
+    #[must_use]
+    pub fn pose(&self, frame: usize, frames: usize) -> Option<Pose> {
+        self.motion
+            .pose(&self.positions, &self.normals, frame, frames)
+    }
+
+    /// This scene with its base mesh moved to `pose` (and no motion of its own): what a
+    /// method without pose updates builds on, and a fresh build to compare a pose update
+    /// with.
+    ///
+    /// # Errors
+    /// A pose with another vertex count than the mesh.
+    pub fn posed(&self, pose: &Pose) -> Result<Scene, String> {
+        if pose.positions.len() != self.positions.len()
+            || pose.normals.len() != self.positions.len()
+        {
+            return Err(format!(
+                "a pose of '{}' needs {} positions and normals, not {} and {}",
+                self.name,
+                self.positions.len(),
+                pose.positions.len(),
+                pose.normals.len()
+            ));
+        }
+        let mut scene = self.clone();
+        scene.positions.clone_from(&pose.positions);
+        scene.normals.clone_from(&pose.normals);
+        scene.motion = Motion::Static;
+        Ok(scene)
     }
 
     /// The base mesh in precision `T`, or why it is invalid there.
@@ -552,6 +591,7 @@ fn shell_torus(
         },
         sun: DVec3::new(0.3, 0.8, 0.5).normalize(),
         material,
+        motion: Motion::deform(Deformation::Breathe),
     }
 }
 
@@ -629,6 +669,7 @@ pub fn cornell(n: usize) -> Scene {
         },
         sun: DVec3::new(0.4, 0.7, 0.6).normalize(),
         material: Material::Diffuse,
+        motion: Motion::deform(Deformation::Squash),
     }
 }
 
@@ -654,6 +695,7 @@ pub fn torus_scene(side: usize) -> Scene {
         },
         sun: DVec3::new(0.3, 0.8, 0.5).normalize(),
         material: Material::Diffuse,
+        motion: Motion::deform(Deformation::Breathe),
     }
 }
 
@@ -817,6 +859,7 @@ pub fn fig9() -> Scene {
         },
         sun: DVec3::new(0.3, 0.8, 0.5).normalize(),
         material: Material::Diffuse,
+        motion: Motion::deform(Deformation::Twist),
     }
 }
 

@@ -42,6 +42,51 @@ impl<T: Real> Nonlinear<T> {
     }
 }
 
+impl<T: Real> Nonlinear<T> {
+    /// Moves the base mesh to `pose` (f64, converted to `T`) and updates the TLAS by
+    /// `update` ([`DisplacedSurface::set_pose`], [`ShellSurface::set_pose`]).
+    ///
+    /// # Errors
+    /// A pose with another vertex count, or a value not finite in `T`.
+    pub fn set_pose(
+        &mut self,
+        pose: &crate::animation::Pose,
+        update: nlrt_accel::TlasUpdate,
+    ) -> Result<nlrt_accel::PoseUpdate, String> {
+        use nlrt_poly::Vector3;
+        let v = |p: &DVec3| T::Vec3::new(T::from_f64(p.x), T::from_f64(p.y), T::from_f64(p.z));
+        let positions: Vec<T::Vec3> = pose.positions.iter().map(v).collect();
+        let normals: Vec<T::Vec3> = pose.normals.iter().map(v).collect();
+        self.set_pose_in_precision(&positions, &normals, update)
+    }
+
+    /// [`Nonlinear::set_pose`] with the pose already in `T` (what `nlrt animate` times).
+    ///
+    /// # Errors
+    /// As [`Nonlinear::set_pose`].
+    pub fn set_pose_in_precision(
+        &mut self,
+        positions: &[T::Vec3],
+        normals: &[T::Vec3],
+        update: nlrt_accel::TlasUpdate,
+    ) -> Result<nlrt_accel::PoseUpdate, String> {
+        match self {
+            Self::Displaced(s) => s.set_pose(positions, normals, update),
+            Self::Shell(s) => s.set_pose(positions, normals, update),
+        }
+        .map_err(|e| format!("pose in {}: {e}", T::NAME))
+    }
+
+    /// The TLAS's SAH cost ([`nlrt_accel::Bvh4::sah_cost`]).
+    #[must_use]
+    pub fn tlas_sah_cost(&self) -> f64 {
+        match self {
+            Self::Displaced(s) => s.tlas().sah_cost(),
+            Self::Shell(s) => s.tlas().sah_cost(),
+        }
+    }
+}
+
 impl<T: Real> Tracer for Nonlinear<T> {
     fn intersect(&self, origin: DVec3, dir: DVec3, t_min: f64, t_max: f64) -> Option<TraceHit> {
         let (ray, t_min, t_max) = ray_in::<T>(origin, dir, t_min, t_max)?;
