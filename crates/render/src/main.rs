@@ -271,7 +271,7 @@ enum Command {
         frames: u32,
         #[command(flatten)]
         args: RenderArgs,
-        /// Methods (comma-separated slugs; default nonlinear-f32,nonlinear-f64,tessellated).
+        /// Methods (comma-separated slugs; default nonlinear-f32,nonlinear-f64,tessellated-f64).
         #[arg(long, value_delimiter = ',', value_parser = parse_method)]
         methods: Vec<Method>,
         /// How nonlinear tracing's TLAS follows each pose: refit, rebuild, or auto (refit,
