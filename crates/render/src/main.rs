@@ -240,6 +240,13 @@ enum Command {
         /// every hit, about 0.3 ms of one core each).
         #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
         ghost_samples: Option<u64>,
+        /// Judge this frame of the scene's motion (`nlrt animate`'s frame numbers, from 0):
+        /// nonlinear tracing is moved there by pose updates from the rest pose.
+        #[arg(long, value_parser = clap::value_parser!(u32).range(0..=100_000))]
+        frame: Option<u32>,
+        /// Frames of the motion's cycle, for `--frame`.
+        #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..=100_000))]
+        frames: u32,
         /// Directory for the leak images (`<scene>-leaks-<method>.png`).
         #[arg(short, long)]
         output: Option<PathBuf>,
@@ -747,6 +754,8 @@ fn main() -> ExitCode {
             method,
             scene_size,
             ghost_samples,
+            frame,
+            frames,
             output,
         } => {
             let built = if scene.ends_with(".toml") {
@@ -772,6 +781,17 @@ fn main() -> ExitCode {
                     }
                 }
             };
+            if let Some(k) = frame
+                && k >= frames
+            {
+                return fail(
+                    "watertight",
+                    format!(
+                        "--frame {k} is not a frame of --frames {frames} (0 to {})",
+                        frames - 1
+                    ),
+                );
+            }
             // Scene files are checked in f64 when loaded; f32 is judged too unless excluded.
             if !matches!(precision, Some(Precision::F64))
                 && let Err(e) = built.check_precision::<f32>()
@@ -836,14 +856,17 @@ fn main() -> ExitCode {
             let judged_hits = ghost_samples.map_or(watertight::JudgedHits::Every, |n| {
                 watertight::JudgedHits::Spaced(usize::try_from(n).unwrap_or(usize::MAX))
             });
-            let reports = match watertight::measure_all(&built, side, &methods, judged_hits) {
-                Ok(r) => r,
-                Err(e) => return fail("watertight", e),
-            };
+            let at = frame.map(|k| (k as usize, frames as usize));
+            let reports =
+                match watertight::measure_all_at_frame(&built, at, side, &methods, judged_hits) {
+                    Ok(r) => r,
+                    Err(e) => return fail("watertight", format!("{scene}: {e}")),
+                };
+            let label = frame.map_or(scene.clone(), |k| format!("{scene} frame {k} of {frames}"));
             for r in reports {
                 let (lo, hi) = r.wilson_95();
                 println!(
-                    "| {scene} | {} | {} | {} | {} | {:.2e} | [{:.1e}, {:.1e}] | {} | {} | {:.1} |",
+                    "| {label} | {} | {} | {} | {} | {:.2e} | [{:.1e}, {:.1e}] | {} | {} | {:.1} |",
                     r.method,
                     r.rays,
                     r.decided,

@@ -258,7 +258,7 @@ pub fn load_from(path: &Path, source: &Source<'_>) -> Result<Scene, String> {
     let sun = (sun / largest).normalize();
     let motion = match &file.animation {
         None => Motion::Static,
-        Some(a) => load_motion(path, a, &dir, source, (&positions, &uvs, &triangles))?,
+        Some(a) => load_motion(path, a, dir, source, (&positions, &uvs, &triangles))?,
     };
     let scene = Scene {
         name: "file",

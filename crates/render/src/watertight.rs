@@ -344,6 +344,25 @@ pub fn measure_all(
     methods: &[Method],
     judged_hits: JudgedHits,
 ) -> Result<Vec<LeakReport>, String> {
+    measure_all_at_frame(scene, None, rays_side, methods, judged_hits)
+}
+
+/// [`measure_all`] on frame `frame.0` of `frame.1` of the scene's motion (`None`: the scene
+/// as it is). Nonlinear tracing is judged as `nlrt animate` runs it: built on the rest pose,
+/// then moved frame by frame to the judged one by pose updates ([`TlasUpdate::DEFAULT`]);
+/// the rays are decided on the posed mesh.
+///
+/// # Errors
+/// As [`measure_all`], and a static scene or a pose not finite in a method's precision.
+///
+/// [`TlasUpdate::DEFAULT`]: nlrt_accel::TlasUpdate::DEFAULT
+pub fn measure_all_at_frame(
+    scene: &Scene,
+    frame: Option<(usize, usize)>,
+    rays_side: usize,
+    methods: &[Method],
+    judged_hits: JudgedHits,
+) -> Result<Vec<LeakReport>, String> {
     for &method in methods {
         judged_precision(method)?;
     }
@@ -360,13 +379,13 @@ pub fn measure_all(
     let mut f32_reports = if in_f32.is_empty() {
         Vec::new()
     } else {
-        measure_in::<f32>(scene, rays_side, &in_f32, judged_hits)?
+        measure_in::<f32>(scene, frame, rays_side, &in_f32, judged_hits)?
     }
     .into_iter();
     let mut f64_reports = if in_f64.is_empty() {
         Vec::new()
     } else {
-        measure_in::<f64>(scene, rays_side, &in_f64, judged_hits)?
+        measure_in::<f64>(scene, frame, rays_side, &in_f64, judged_hits)?
     }
     .into_iter();
     Ok(methods
@@ -506,19 +525,36 @@ fn decide<T: Real>(
 }
 
 fn measure_in<T: Real>(
-    scene: &Scene,
+    rest: &Scene,
+    frame: Option<(usize, usize)>,
     rays_side: usize,
     methods: &[Method],
     judged_hits: JudgedHits,
 ) -> Result<Vec<LeakReport>, String> {
-    if !matches!(scene.content, Content::Displacement(_)) {
+    if !matches!(rest.content, Content::Displacement(_)) {
         return Err(format!(
             "scene '{}' is shell-mapped; watertightness is measured on displacement scenes",
-            scene.name
+            rest.name
         ));
     }
     let mut start = std::time::Instant::now();
-    let tracer = Nonlinear::<T>::new(scene);
+    let mut tracer = Nonlinear::<T>::new(rest);
+    let posed_scene;
+    let scene = match frame {
+        None => rest,
+        Some((k, frames)) => {
+            let pose_of = |j: usize| {
+                rest.pose(j, frames)
+                    .ok_or_else(|| format!("scene '{}' has no motion", rest.name))
+            };
+            for j in 0..=k {
+                tracer.set_pose(&pose_of(j)?, nlrt_accel::TlasUpdate::DEFAULT)?;
+            }
+            posed_scene = rest.posed(&pose_of(k)?)?;
+            posed_scene.check_precision::<T>()?;
+            &posed_scene
+        }
+    };
     let Nonlinear::Displaced(surface) = &tracer else {
         unreachable!("displacement scene")
     };

@@ -282,3 +282,45 @@ fn exported_scenes_keep_their_motion() {
     assert_eq!(loaded.motion.describe(), scene.motion.describe());
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// `nlrt watertight` judges a frame of a moving mesh: nonlinear tracing moved there by pose
+/// updates, rays decided on the posed mesh, no leak and no ghost hit in either precision.
+#[test]
+fn watertight_judges_a_frame_of_the_motion() {
+    let run = nlrt(&[
+        "watertight",
+        "torus",
+        "--frame",
+        "5",
+        "--frames",
+        "16",
+        "--rays",
+        "4096",
+        "--method",
+        "nonlinear",
+        "--ghost-samples",
+        "64",
+    ]);
+    let out = String::from_utf8_lossy(&run.stdout);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let rows: Vec<&str> = out
+        .lines()
+        .filter(|l| l.starts_with("| torus frame 5 of 16 |"))
+        .collect();
+    assert_eq!(rows.len(), 2, "{out}");
+    for row in rows {
+        let cells: Vec<&str> = row.split('|').map(str::trim).collect();
+        // | scene | method | rays | decided | leaks | rate | interval | ghosts (of hits) | ...
+        assert!(cells[4].parse::<u64>().unwrap() > 1000, "{row}");
+        assert_eq!(cells[5], "0", "leaks: {row}");
+        assert!(cells[8].starts_with("0 of "), "ghosts: {row}");
+    }
+    expect_exit_2(
+        &["watertight", "torus", "--frame", "16", "--frames", "16"],
+        &["--frame 16 is not a frame of --frames 16"],
+    );
+}
