@@ -16,11 +16,17 @@ use nlrt_tests::geometry::{
 
 const RAYS_PER_POSE: usize = 150;
 const POSES: usize = 16;
+/// An automatic rule tight enough to rebuild on some of these poses and refit on others (the
+/// default rebuilds on none of them: a refitted tree over this small grid costs at most 1.2x
+/// a fresh one), so that both of its branches are compared with fresh builds.
+const TIGHT: TlasUpdate = TlasUpdate::Auto {
+    max_cost_growth: 1.02,
+};
 
 /// Pose `k` of `POSES` of a mesh at rest: a travelling wave with a shear for most frames;
 /// frame 5 squashes the mesh flat onto z = 0 (the bend's triangles degenerate towards
 /// lines), frame 9 collapses every vertex to one point with zero normals, frame 11 folds
-/// the mesh onto itself (long triangles across the folds), frame 13 turns
+/// the mesh like an accordion (layers of triangles on top of each other), frame 13 turns
 /// every normal inside out (inverted prisms).
 fn pose<T: Real>(rest: &BaseMesh<T>, k: usize) -> (Vec<T::Vec3>, Vec<T::Vec3>) {
     let phase = k as f64 / POSES as f64 * std::f64::consts::TAU;
@@ -38,10 +44,14 @@ fn pose<T: Real>(rest: &BaseMesh<T>, k: usize) -> (Vec<T::Vec3>, Vec<T::Vec3>) {
             normals.map(|_| v([0.0; 3])).collect(),
         ),
         11 => (
-            // Folded three times along x and spread along y: far from the rest pose, so a
-            // refitted tree's boxes overlap and the automatic rule must rebuild.
+            // Folded like an accordion along x onto [0, 1/2] (six layers on top of each
+            // other): a tree built at rest, which splits by x, now has children that overlap
+            // wholly, while a fresh tree splits by y, so the automatic rule must rebuild.
             positions
-                .map(|[x, y, z]| v([(3.0 * x).fract(), 4.0 * y * x, z]))
+                .map(|[x, y, z]| {
+                    let f = (3.0 * x).fract();
+                    v([f.min(1.0 - f), y, z + 0.05 * x])
+                })
                 .collect(),
             normals.map(v).collect(),
         ),
@@ -67,7 +77,7 @@ fn pose<T: Real>(rest: &BaseMesh<T>, k: usize) -> (Vec<T::Vec3>, Vec<T::Vec3>) {
     }
 }
 
-/// The three update rules, each on its own surface, against a fresh build per pose: every
+/// The update rules, each on its own surface, against a fresh build per pose: every
 /// ray's hit distance is bit-identical (two prisms can report the same distance where they
 /// share an edge, so the triangle may differ only then) and finite.
 fn poses_agree<T: Real, S: Posable<Real = T>, H: Copy + std::fmt::Debug>(
@@ -76,13 +86,17 @@ fn poses_agree<T: Real, S: Posable<Real = T>, H: Copy + std::fmt::Debug>(
     hit: impl Fn(&S, &Ray<T>) -> Option<H>,
     distance: impl Fn(&H) -> (T, u32),
 ) {
-    let mut surfaces: Vec<(TlasUpdate, S)> =
-        [TlasUpdate::Refit, TlasUpdate::Rebuild, TlasUpdate::DEFAULT]
-            .into_iter()
-            .map(|u| (u, build(rest.clone())))
-            .collect();
+    let mut surfaces: Vec<(TlasUpdate, S)> = [
+        TlasUpdate::Refit,
+        TlasUpdate::Rebuild,
+        TlasUpdate::DEFAULT,
+        TIGHT,
+    ]
+    .into_iter()
+    .map(|u| (u, build(rest.clone())))
+    .collect();
     let mut rng = SplitMix64::new(0x905e);
-    let (mut hits, mut rebuilds) = (0usize, 0usize);
+    let (mut hits, mut tight_rebuilds) = (0usize, 0usize);
     for k in 0..POSES {
         let (positions, normals) = pose(rest, k);
         let mut posed = rest.clone();
@@ -91,7 +105,7 @@ fn poses_agree<T: Real, S: Posable<Real = T>, H: Copy + std::fmt::Debug>(
         for (update, surface) in &mut surfaces {
             let done = surface.set_pose(&positions, &normals, *update).unwrap();
             assert!(done.sah_cost.is_finite() && done.sah_cost_at_build.is_finite());
-            rebuilds += usize::from(done.rebuilt && *update == TlasUpdate::DEFAULT);
+            tight_rebuilds += usize::from(done.rebuilt && *update == TIGHT);
             // Refit never fails here (every prism box stays finite); Rebuild always builds.
             match update {
                 TlasUpdate::Refit => assert!(!done.rebuilt),
@@ -127,7 +141,11 @@ fn poses_agree<T: Real, S: Posable<Real = T>, H: Copy + std::fmt::Debug>(
         }
     }
     assert!(hits > POSES * RAYS_PER_POSE / 4, "{hits} hits");
-    assert!(rebuilds >= 1, "the automatic rule never rebuilt");
+    assert!(
+        (1..POSES).contains(&tight_rebuilds),
+        "the tight automatic rule rebuilt on {tight_rebuilds} of {POSES} poses: both of its \
+         branches must be taken"
+    );
 }
 
 /// What both surfaces offer for this test.

@@ -21,8 +21,8 @@ pub enum TlasUpdate {
     Refit,
     /// Build the tree afresh for the pose.
     Rebuild,
-    /// Refit, then rebuild when the refitted tree's SAH cost ([`Bvh4::sah_cost`]) exceeds
-    /// `max_cost_growth` times the cost of the tree right after its last build.
+    /// Refit, then rebuild when the refitted tree's cost growth ([`PoseUpdate::cost_growth`])
+    /// exceeds `max_cost_growth`.
     Auto {
         /// The growth of the SAH cost tolerated before a rebuild.
         max_cost_growth: f64,
@@ -30,11 +30,14 @@ pub enum TlasUpdate {
 }
 
 impl TlasUpdate {
-    /// The default rule: rebuild once the refitted tree's SAH cost has grown by a quarter.
-    /// A rebuild of the TLAS costs several times a refit (0.56 ms against 0.09 ms on the
-    /// cylinder's 512 prisms, `nlrt animate cylinder --frames 8`, 2026-12-03, 2-core Xeon),
-    /// and a refitted cylinder frame at 1.14x the fresh tree's SAH cost rendered at 1.04x its
-    /// time; the factor trades the two and is not yet tuned at paper size.
+    /// The default rule: rebuild once the refitted tree's cost growth exceeds a quarter. A
+    /// TLAS rebuild costs 6 to 8 times a refit (paper-size cylinder, 512 prisms: 0.42 against
+    /// 0.06 ms; fur, 8,192 prisms: 7.1 against 0.96 ms). On a strongly twisted cylinder
+    /// (`nlrt animate cylinder --deformation twist --amplitude 3`, 16 frames), refitting only
+    /// let the SAH cost reach 1.82x a fresh tree's (median 1.35x) and rendered 1.12x slower
+    /// than fresh builds; this rule rebuilt 4 times, kept the cost within 1.23x and rendered
+    /// within 1.1%. Among the built-in motions only the cylinder's bend rebuilds (once per
+    /// cycle). Figures and commands: `docs/measurements.md`, "Animated base meshes".
     pub const DEFAULT: Self = Self::Auto {
         max_cost_growth: 1.25,
     };
@@ -55,6 +58,31 @@ pub struct PoseUpdate {
     pub sah_cost: f64,
     /// The TLAS's SAH cost right after its last build (this pose's, when rebuilt).
     pub sah_cost_at_build: f64,
+    /// How much worse the tree is than right after its last build, with the prisms' own
+    /// growth divided out: the SAH cost over [`sah_lower_bound`] of the current prism boxes,
+    /// divided by the same ratio at the last build (1 after a rebuild). A motion that
+    /// swells every prism (a twist) raises a fresh tree's cost as much as the refitted
+    /// one's, so only the refitted boxes drifting apart from their content counts.
+    pub cost_growth: f64,
+}
+
+/// The least SAH cost ([`Bvh4::sah_cost`]) of any tree over these primitive boxes: each
+/// primitive is tested whenever the ray enters its leaf's box, which holds the primitive's,
+/// so the primitive tests alone cost at least the boxes' areas over the root's.
+#[must_use]
+pub fn sah_lower_bound<T: Real>(boxes: &[Aabb<T>], root: &Aabb<T>) -> f64 {
+    let root = root.half_area().to_f64();
+    if !(root > 0.0) {
+        return 0.0;
+    }
+    boxes.iter().map(|b| b.half_area().to_f64()).sum::<f64>() / root
+}
+
+/// `cost` over [`sah_lower_bound`] of `boxes` under `tree`'s root (1 when the bound is 0:
+/// flat or empty boxes, where no tree can do better or worse).
+pub(crate) fn sah_excess<T: Real>(cost: f64, boxes: &[Aabb<T>], tree: &Bvh4<T>) -> f64 {
+    let bound = sah_lower_bound(boxes, &tree.bounds());
+    if bound > 0.0 { cost / bound } else { 1.0 }
 }
 
 impl<T: Real> PrismTlas<T> {
@@ -79,10 +107,9 @@ impl<T: Real> PrismTlas<T> {
             TlasUpdate::Refit | TlasUpdate::Auto { .. } => self.tlas.refit(&boxes),
         };
         let sah_cost = self.tlas.sah_cost();
+        let cost_growth = sah_excess(sah_cost, &boxes, &self.tlas) / self.sah_excess_at_build;
         let too_costly = match update {
-            TlasUpdate::Auto { max_cost_growth } => {
-                !(sah_cost <= max_cost_growth * self.sah_cost_at_build)
-            }
+            TlasUpdate::Auto { max_cost_growth } => !(cost_growth <= max_cost_growth),
             TlasUpdate::Refit | TlasUpdate::Rebuild => false,
         };
         if refitted && !too_costly {
@@ -90,14 +117,68 @@ impl<T: Real> PrismTlas<T> {
                 rebuilt: false,
                 sah_cost,
                 sah_cost_at_build: self.sah_cost_at_build,
+                cost_growth,
             });
         }
         self.tlas = Bvh4::build(&boxes, 1);
         self.sah_cost_at_build = self.tlas.sah_cost();
+        self.sah_excess_at_build = sah_excess(self.sah_cost_at_build, &boxes, &self.tlas);
         Ok(PoseUpdate {
             rebuilt: true,
             sah_cost: self.sah_cost_at_build,
             sah_cost_at_build: self.sah_cost_at_build,
+            cost_growth: 1.0,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nlrt_poly::glam::DVec3;
+
+    /// `n` boxes on a jittered line of cells, half-extent `size`.
+    fn boxes(n: usize, size: f64) -> Vec<Aabb<f64>> {
+        (0..n)
+            .map(|i| {
+                let c = DVec3::new(i as f64, ((i * 7) % 5) as f64 * 0.1, 0.0);
+                Aabb::of_points([c - DVec3::splat(size), c + DVec3::splat(size)])
+            })
+            .collect()
+    }
+
+    #[test]
+    fn the_lower_bound_holds_and_only_a_degrading_tree_grows() {
+        let rest = boxes(512, 0.3);
+        let mut tree = Bvh4::build(&rest, 1);
+        let excess_at_build = sah_excess(tree.sah_cost(), &rest, &tree);
+        assert!(tree.sah_cost() >= sah_lower_bound(&rest, &tree.bounds()));
+        assert!(excess_at_build >= 1.0);
+        // Every box swollen in place (a twist's prisms): the refitted and a fresh tree both
+        // cost more, so the growth judged stays near 1 while the raw cost rises.
+        let swollen = boxes(512, 0.9);
+        assert!(tree.refit(&swollen));
+        let growth = sah_excess(tree.sah_cost(), &swollen, &tree) / excess_at_build;
+        let fresh = Bvh4::build(&swollen, 1);
+        let fresh_growth = sah_excess(fresh.sah_cost(), &swollen, &fresh) / excess_at_build;
+        assert!(tree.sah_cost() > 1.2 * Bvh4::build(&rest, 1).sah_cost());
+        assert!(
+            growth < 1.1 * fresh_growth.max(1.0),
+            "{growth} vs fresh {fresh_growth}"
+        );
+        // The boxes' order reversed along the line: every leaf's neighbours now lie far apart,
+        // which the refitted tree's boxes must span.
+        let mut shuffled = rest.clone();
+        shuffled.reverse();
+        for (i, b) in shuffled.iter_mut().enumerate() {
+            if i % 2 == 0 {
+                *b = rest[i];
+            }
+        }
+        let mut tree = Bvh4::build(&rest, 1);
+        assert!(tree.refit(&shuffled));
+        let growth = sah_excess(tree.sah_cost(), &shuffled, &tree) / excess_at_build;
+        assert!(growth > 2.0, "{growth}");
+        assert_eq!(sah_lower_bound::<f64>(&[], &Aabb::EMPTY), 0.0);
     }
 }

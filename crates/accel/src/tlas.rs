@@ -8,6 +8,7 @@ use nlrt_shellmap::{NonlinearRay, Prism, Ray};
 
 use crate::bvh::{Bvh4, SlabRay};
 use crate::mesh::{BaseMesh, prism_bounds};
+use crate::pose::sah_excess;
 use crate::stats::TraversalStats;
 
 /// Texel coordinates beyond this (in one axis, after tiling) are rejected: they keep every
@@ -74,8 +75,11 @@ pub(crate) struct PrismTlas<T: Real> {
     tiling: T,
     roots: Vec<RootNodes>,
     pub(crate) tlas: Bvh4<T>,
-    /// The TLAS's SAH cost right after its last build ([`crate::TlasUpdate::Auto`]).
+    /// The TLAS's SAH cost right after its last build.
     pub(crate) sah_cost_at_build: f64,
+    /// The same cost over [`crate::pose::sah_lower_bound`] of the prism boxes then (what
+    /// [`crate::TlasUpdate::Auto`] compares with).
+    pub(crate) sah_excess_at_build: f64,
 }
 
 impl<T: Real> PrismTlas<T> {
@@ -116,12 +120,14 @@ impl<T: Real> PrismTlas<T> {
             roots.push(root_nodes(lo, hi));
         }
         let tlas = Bvh4::build(&boxes, 1);
+        let sah_cost_at_build = tlas.sah_cost();
         Ok(Self {
             mesh,
             height_scale,
             tiling,
             roots,
-            sah_cost_at_build: tlas.sah_cost(),
+            sah_cost_at_build,
+            sah_excess_at_build: sah_excess(sah_cost_at_build, &boxes, &tlas),
             tlas,
         })
     }
