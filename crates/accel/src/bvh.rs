@@ -671,6 +671,25 @@ pub fn ray_triangle<T: Real>(
     Some((e2.dot(q) * inv, b1, b2))
 }
 
+/// A lower bound on the SAH cost ([`Bvh4::sah_cost`]) of any tree over these primitive boxes: each
+/// primitive is tested whenever the ray enters its leaf's box, which holds the primitive's,
+/// so the primitive tests alone cost at least the boxes' areas over the root's.
+#[must_use]
+pub fn sah_lower_bound<T: Real>(boxes: &[Aabb<T>], root: &Aabb<T>) -> f64 {
+    let root = root.half_area().to_f64();
+    if !(root > 0.0) {
+        return 0.0;
+    }
+    boxes.iter().map(|b| b.half_area().to_f64()).sum::<f64>() / root
+}
+
+/// `cost` over [`sah_lower_bound`] of `boxes` under `tree`'s root (1 when the bound is 0:
+/// flat or empty boxes, where no tree can do better or worse).
+pub(crate) fn sah_excess<T: Real>(cost: f64, boxes: &[Aabb<T>], tree: &Bvh4<T>) -> f64 {
+    let bound = sah_lower_bound(boxes, &tree.bounds());
+    if bound > 0.0 { cost / bound } else { 1.0 }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

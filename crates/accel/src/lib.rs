@@ -49,12 +49,12 @@ mod shell;
 mod stats;
 mod tlas;
 
-pub use bvh::{ARITY, Aabb, Bvh4, Node4, SlabRay, ray_triangle};
+pub use bvh::{ARITY, Aabb, Bvh4, Node4, SlabRay, ray_triangle, sah_lower_bound};
 pub use cells::{CellTriangle, traverse_cells, uv_in_cells};
 pub use displacement::{DisplacedSurface, DisplacementError, SurfaceHit, TexelPart};
 pub use heightfield::{HEIGHT_ONE, HeightField, HeightMapError, Wrap};
 pub use mesh::{BaseMesh, MeshError, prism_bounds};
-pub use pose::{PoseUpdate, TlasUpdate, sah_lower_bound};
+pub use pose::{PoseUpdate, TlasUpdate};
 pub use shell::{ShellError, ShellHit, ShellObject, ShellSurface};
 pub use stats::TraversalStats;
 pub use tlas::{MAX_TEXEL_COORDINATE, RootNodes};

@@ -8,7 +8,7 @@
 use alloc::vec::Vec;
 use nlrt_poly::Real;
 
-use crate::bvh::{Aabb, Bvh4};
+use crate::bvh::{Aabb, Bvh4, sah_excess};
 use crate::mesh::{MeshError, prism_bounds};
 use crate::tlas::PrismTlas;
 
@@ -59,30 +59,11 @@ pub struct PoseUpdate {
     /// The TLAS's SAH cost right after its last build (this pose's, when rebuilt).
     pub sah_cost_at_build: f64,
     /// How much worse the tree is than right after its last build, with the prisms' own
-    /// growth divided out: the SAH cost over [`sah_lower_bound`] of the current prism boxes,
+    /// growth divided out: the SAH cost over [`crate::sah_lower_bound`] of the current prism boxes,
     /// divided by the same ratio at the last build (1 after a rebuild). A motion that
     /// swells every prism (a twist) raises a fresh tree's cost as much as the refitted
     /// one's, so only the refitted boxes drifting apart from their content counts.
     pub cost_growth: f64,
-}
-
-/// The least SAH cost ([`Bvh4::sah_cost`]) of any tree over these primitive boxes: each
-/// primitive is tested whenever the ray enters its leaf's box, which holds the primitive's,
-/// so the primitive tests alone cost at least the boxes' areas over the root's.
-#[must_use]
-pub fn sah_lower_bound<T: Real>(boxes: &[Aabb<T>], root: &Aabb<T>) -> f64 {
-    let root = root.half_area().to_f64();
-    if !(root > 0.0) {
-        return 0.0;
-    }
-    boxes.iter().map(|b| b.half_area().to_f64()).sum::<f64>() / root
-}
-
-/// `cost` over [`sah_lower_bound`] of `boxes` under `tree`'s root (1 when the bound is 0:
-/// flat or empty boxes, where no tree can do better or worse).
-pub(crate) fn sah_excess<T: Real>(cost: f64, boxes: &[Aabb<T>], tree: &Bvh4<T>) -> f64 {
-    let bound = sah_lower_bound(boxes, &tree.bounds());
-    if bound > 0.0 { cost / bound } else { 1.0 }
 }
 
 impl<T: Real> PrismTlas<T> {
@@ -135,6 +116,7 @@ impl<T: Real> PrismTlas<T> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::bvh::sah_lower_bound;
     use nlrt_poly::glam::DVec3;
 
     /// `n` boxes on a jittered line of cells, half-extent `size`.

@@ -6,9 +6,8 @@ use alloc::vec::Vec;
 use nlrt_poly::{Real, Vector2};
 use nlrt_shellmap::{NonlinearRay, Prism, Ray};
 
-use crate::bvh::{Bvh4, SlabRay};
+use crate::bvh::{Bvh4, SlabRay, sah_excess};
 use crate::mesh::{BaseMesh, prism_bounds};
-use crate::pose::sah_excess;
 use crate::stats::TraversalStats;
 
 /// Texel coordinates beyond this (in one axis, after tiling) are rejected: they keep every
@@ -77,7 +76,7 @@ pub(crate) struct PrismTlas<T: Real> {
     pub(crate) tlas: Bvh4<T>,
     /// The TLAS's SAH cost right after its last build.
     pub(crate) sah_cost_at_build: f64,
-    /// The same cost over [`crate::pose::sah_lower_bound`] of the prism boxes then (what
+    /// The same cost over [`crate::sah_lower_bound`] of the prism boxes then (what
     /// [`crate::TlasUpdate::Auto`] compares with).
     pub(crate) sah_excess_at_build: f64,
 }

@@ -7,7 +7,7 @@
 //! `cargo bench -p nlrt-poly --bench solvers`
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
-use nlrt_oracle::families::{RandomFamily, SplitMix64};
+use nlrt_oracle::families::{RandomFamily, SplitMix64, cubic_from_roots};
 use nlrt_oracle::peers;
 use nlrt_poly::baseline::solve_cubic_closed_form_in;
 use nlrt_poly::{Real, first_cubic_root_in, solve_cubic_in, solve_quadratic};
@@ -20,6 +20,44 @@ fn unit_cubics<T: Real>() -> Vec<[T; 4]> {
     (0..SAMPLES)
         .map(|_| RandomFamily::ThreeRootsInUnit.sample::<T>(&mut rng).coeffs)
         .collect()
+}
+
+/// Cubics with one root in `[0, 1/16]` and two in `[1/2, 1]` (uniform in those ranges).
+fn near_start_cubics<T: Real>() -> Vec<[T; 4]> {
+    let mut rng = SplitMix64::new(0xf1257);
+    (0..SAMPLES)
+        .map(|_| {
+            let roots = [
+                rng.range(0.0, 0.0625),
+                rng.range(0.5, 1.0),
+                rng.range(0.5, 1.0),
+            ];
+            cubic_from_roots::<T>(roots, 1.0)
+        })
+        .collect()
+}
+
+/// `first_cubic_root_in` against `solve_cubic_in` on the same cubics.
+fn bench_first_root<T: Real>(crit: &mut Criterion, group: &str, cubics: &[[T; 4]], lo: T, hi: T) {
+    let mut g = crit.benchmark_group(format!("{group}/{}", T::NAME));
+    g.throughput(Throughput::Elements(cubics.len() as u64));
+    g.bench_function(BenchmarkId::from_parameter("first"), |b| {
+        b.iter(|| {
+            cubics
+                .iter()
+                .filter_map(|&c| first_cubic_root_in(black_box(c), lo, hi))
+                .count()
+        })
+    });
+    g.bench_function(BenchmarkId::from_parameter("all"), |b| {
+        b.iter(|| {
+            cubics
+                .iter()
+                .filter_map(|&c| solve_cubic_in(black_box(c), lo, hi).first().copied())
+                .count()
+        })
+    });
+    g.finish();
 }
 
 /// The f64-only peers on the same cubics, on `[lo, hi]`.
@@ -95,17 +133,15 @@ fn bench_type<T: Real + roots::FloatType>(crit: &mut Criterion) {
         T::INFINITY,
     );
 
-    let mut g = crit.benchmark_group(format!("cubic_first_root_in_unit/{}", T::NAME));
-    g.throughput(Throughput::Elements(SAMPLES as u64));
-    g.bench_function(BenchmarkId::from_parameter("nlrt"), |b| {
-        b.iter(|| {
-            cubics
-                .iter()
-                .filter_map(|&c| first_cubic_root_in(black_box(c), lo, hi))
-                .count()
-        })
-    });
-    g.finish();
+    bench_first_root(crit, "cubic_first_root_in_unit", &cubics, lo, hi);
+    // The texel test's case: the nearest root early in the interval, the others later.
+    bench_first_root(
+        crit,
+        "cubic_first_root_near_start",
+        &near_start_cubics(),
+        lo,
+        hi,
+    );
 
     let quadratics: Vec<[T; 3]> = cubics
         .iter()
