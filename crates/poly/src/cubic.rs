@@ -628,10 +628,9 @@ fn refine<T: Real>(
     };
     // The closed-form guess first, then the Taylor guess at a critical end (when the piece is
     // plain-evaluable): each gets the fast path; what fails falls to the safeguarded iteration.
-    for g in [guess, critical.and_then(|c| taylor_guess(p, c, a, b))]
-        .into_iter()
-        .flatten()
-    {
+    // The Taylor guess is computed only once the first has failed (most solves end on it).
+    let taylor = core::iter::once_with(|| critical.and_then(|c| taylor_guess(p, c, a, b)));
+    for g in core::iter::once(guess).chain(taylor).flatten() {
         if !(g > a && g < b) {
             continue;
         }
