@@ -3,7 +3,7 @@
 
 use core::fmt;
 use nlrt_poly::{Real, Vector3};
-use nlrt_poly::{horner_with_bound_scaled, solve_cubic_in, solve_quadratic_in};
+use nlrt_poly::{decided_sign, solve_cubic_in, solve_quadratic_in};
 use nlrt_shellmap::{
     BaseEdges, Hit, NonlinearRay, Prism, Ray, TextureCurve, TexturePlane, alpha_beta_eq11,
     facing_unit, world_normal,
@@ -237,7 +237,16 @@ impl<T: Real> DisplacedSurface<T> {
     /// The plane of the microtriangle `part` of texel `(x, y)` (normal with `n_h > 0`); the
     /// flat plane `h = const` whenever the texel is flat, whatever `part` says.
     fn texel_plane(&self, x: i32, y: i32, part: TexelPart) -> Option<TexturePlane<T>> {
-        let ([u0, v0, u1, v1], [h00, h10, h01, h11]) = self.texel_geometry(x, y);
+        let (uv, h) = self.texel_geometry(x, y);
+        Self::plane_of(uv, h, part)
+    }
+
+    /// [`DisplacedSurface::texel_plane`] from the texel's geometry, already read.
+    fn plane_of(
+        [u0, v0, u1, v1]: [T; 4],
+        [h00, h10, h01, h11]: [T; 4],
+        part: TexelPart,
+    ) -> Option<TexturePlane<T>> {
         let p = |u: T, v: T, h: T| T::Vec3::new(u, v, h);
         let flat = h00 == h10 && h00 == h01 && h00 == h11;
         match if flat { TexelPart::Flat } else { part } {
@@ -296,7 +305,8 @@ impl<T: Real> DisplacedSurface<T> {
         t_min: T,
         t_max: T,
     ) -> Option<(Hit<T>, TexelPart)> {
-        let ([u0, v0, u1, v1], [h00, h10, h01, h11]) = self.texel_geometry(x, y);
+        let (uv, heights) = self.texel_geometry(x, y);
+        let ([u0, v0, u1, v1], [h00, h10, h01, h11]) = (uv, heights);
         let flat = h00 == h10 && h00 == h01 && h00 == h11;
         let (part_l, part_u) = if flat {
             (TexelPart::Flat, TexelPart::Flat)
@@ -304,8 +314,8 @@ impl<T: Real> DisplacedSurface<T> {
             (TexelPart::Lower, TexelPart::Upper)
         };
         let (Some(plane_l), Some(plane_u)) = (
-            self.texel_plane(x, y, part_l),
-            self.texel_plane(x, y, part_u),
+            Self::plane_of(uv, heights, part_l),
+            Self::plane_of(uv, heights, part_u),
         ) else {
             return None;
         };
@@ -468,9 +478,10 @@ impl<T: Real> DisplacedSurface<T> {
                 _ => None,
             };
             if let Some((own_cubic, own_abh, own_part, Some(other))) = pair {
-                let (vo, bo) = horner_with_bound_scaled(own_cubic, a);
-                let (vn, bn) = horner_with_bound_scaled(&other, a);
-                let certain_same = (vo > bo && vn > bn) || (vo < -bo && vn < -bn);
+                let certain_same = match decided_sign(own_cubic, a) {
+                    Some(own) => decided_sign(&other, a) == Some(own),
+                    None => false,
+                };
                 if !certain_same {
                     consider(a, own_abh, own_part, &mut t_max);
                 }

@@ -143,6 +143,44 @@ pub fn horner_with_bound_scaled<T: Real, const N: usize>(c: &[T; N], x: T) -> (T
     horner_with_bound(&rescale_variable(*c, k), x.scale_pow2(-k))
 }
 
+/// The sign of `p(x)` where the rounding-error bound of [`horner_with_bound_scaled`] decides
+/// it: `Some(true)` for certainly positive, `Some(false)` for certainly negative, `None` where
+/// `|p(x)|` is within the bound. The same answer as comparing that function's value with its
+/// bound, usually without its rescaling: where plain evaluation neither overflows nor sinks
+/// below the normal range (value and bound finite, bound above the smallest normal), the two
+/// evaluations round alike (the scaled one only multiplies every step by one power of two)
+/// and differ only in the bound's underflow term, so a value beyond 4x the plain bound is
+/// beyond the scaled one too, with the same sign.
+///
+/// ```
+/// use nlrt_poly::decided_sign;
+/// // (x - 1)(x - 2): positive at 0, negative at 1.5, undecided at the root 1.
+/// let c = [2.0f64, -3.0, 1.0];
+/// assert_eq!(decided_sign(&c, 0.0), Some(true));
+/// assert_eq!(decided_sign(&c, 1.5), Some(false));
+/// assert_eq!(decided_sign(&c, 1.0), None);
+/// ```
+#[must_use]
+#[inline]
+pub fn decided_sign<T: Real, const N: usize>(c: &[T; N], x: T) -> Option<bool> {
+    let (v, bound) = horner_with_bound(c, x);
+    if v.is_finite()
+        && bound.is_finite()
+        && bound > T::MIN_POSITIVE
+        && v.abs() > T::from_i32(4) * bound
+    {
+        return Some(v > T::ZERO);
+    }
+    let (v, bound) = horner_with_bound_scaled(c, x);
+    if v > bound {
+        Some(true)
+    } else if v < -bound {
+        Some(false)
+    } else {
+        None
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -175,6 +213,47 @@ mod tests {
                     assert!(c[0] >= 1.0 && c[0] < 2.0);
                     let small = normalize([1.0 as T, 2.0, 3.0]);
                     assert_eq!(small, [1.0, 2.0, 3.0]);
+                }
+
+                /// `decided_sign` gives the scaled comparison's answer on cubics of every
+                /// scale, at points near and far from their roots, and at 0.
+                #[test]
+                fn decided_sign_equals_the_scaled_comparison() {
+                    let mut s = 0x5eedu64;
+                    let mut r = move || {
+                        s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                        (s >> 11) as f64 / (1u64 << 53) as f64
+                    };
+                    let mut undecided = 0;
+                    for _ in 0..20000 {
+                        let e = |r: &mut dyn FnMut() -> f64| {
+                            let span = (T::MAX_EXPONENT / 2) as f64;
+                            T::pow2(((r() * 2.0 - 1.0) * span) as i32)
+                        };
+                        let (root, scale) = (r() * 4.0 - 2.0, e(&mut r));
+                        // scale (x - root)(x - 1/3)(x + 2), with one coefficient sometimes 0.
+                        let mut c: [T; 4] = [
+                            (2.0 * root / 3.0) as T,
+                            (-(root * 5.0 / 3.0) - 2.0 / 3.0) as T,
+                            (5.0 / 3.0 - root) as T,
+                            1.0,
+                        ]
+                        .map(|v| v * scale);
+                        if r() < 0.1 {
+                            c[(r() * 4.0) as usize % 4] = 0.0;
+                        }
+                        let x = match (r() * 4.0) as u32 {
+                            0 => root as T,
+                            1 => (root as T) * (1.0 + T::EPSILON * (r() * 64.0 - 32.0) as T),
+                            2 => 0.0,
+                            _ => (r() * 8.0 - 4.0) as T * e(&mut r),
+                        };
+                        let (v, b) = horner_with_bound_scaled(&c, x);
+                        let want = if v > b { Some(true) } else if v < -b { Some(false) } else { None };
+                        assert_eq!(decided_sign(&c, x), want, "{c:?} at {x}");
+                        undecided += usize::from(want.is_none());
+                    }
+                    assert!(undecided > 100, "{undecided}");
                 }
 
                 #[test]

@@ -46,7 +46,7 @@ mod roots;
 mod vector;
 
 pub use cubic::{first_cubic_root_in, solve_cubic, solve_cubic_in};
-pub use eval::{horner, horner_with_bound, horner_with_bound_scaled};
+pub use eval::{decided_sign, horner, horner_with_bound, horner_with_bound_scaled};
 pub use glam;
 pub use quadratic::{discriminant, quadratic_range, solve_quadratic, solve_quadratic_in};
 pub use real::Real;
