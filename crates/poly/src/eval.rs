@@ -143,6 +143,19 @@ pub fn horner_with_bound_scaled<T: Real, const N: usize>(c: &[T; N], x: T) -> (T
     horner_with_bound(&rescale_variable(*c, k), x.scale_pow2(-k))
 }
 
+/// Whether a plain [`horner_with_bound`] result `(v, bound)` already shows `|p(x)|` beyond
+/// the bound of [`horner_with_bound_scaled`] at the same point: value and bound finite, the
+/// bound above the smallest normal (so nothing sank into subnormals), and `|v|` beyond 4x the
+/// bound (the two evaluations round alike up to the bound's underflow term).
+#[must_use]
+#[inline(always)]
+pub(crate) fn plainly_beyond_bound<T: Real>(v: T, bound: T) -> bool {
+    v.is_finite()
+        && bound.is_finite()
+        && bound > T::MIN_POSITIVE
+        && v.abs() > T::from_i32(4) * bound
+}
+
 /// The sign of `p(x)` where the rounding-error bound of [`horner_with_bound_scaled`] decides
 /// it: `Some(true)` for certainly positive, `Some(false)` for certainly negative, `None` where
 /// `|p(x)|` is within the bound. The same answer as comparing that function's value with its
@@ -164,11 +177,7 @@ pub fn horner_with_bound_scaled<T: Real, const N: usize>(c: &[T; N], x: T) -> (T
 #[inline]
 pub fn decided_sign<T: Real, const N: usize>(c: &[T; N], x: T) -> Option<bool> {
     let (v, bound) = horner_with_bound(c, x);
-    if v.is_finite()
-        && bound.is_finite()
-        && bound > T::MIN_POSITIVE
-        && v.abs() > T::from_i32(4) * bound
-    {
+    if plainly_beyond_bound(v, bound) {
         return Some(v > T::ZERO);
     }
     let (v, bound) = horner_with_bound_scaled(c, x);

@@ -213,11 +213,7 @@ fn is_pseudo_root<T: Real>(c: &[T; 3], x: T) -> bool {
     // from both (finite, bound above the normal range's floor) a value beyond 4x the bound
     // cannot be within the scaled bound either. Most out-of-range roots end here.
     let (v, bound) = crate::eval::horner_with_bound(c, x);
-    if v.is_finite()
-        && bound.is_finite()
-        && bound > T::MIN_POSITIVE
-        && v.abs() > T::from_i32(4) * bound
-    {
+    if crate::eval::plainly_beyond_bound(v, bound) {
         return false;
     }
     let (v, bound) = horner_with_bound_scaled(c, x);
