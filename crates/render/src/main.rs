@@ -382,6 +382,16 @@ fn resolve_scene(name: &str, size: Size) -> Result<scenes::Scene, String> {
 /// every hit).
 const REPORT_GHOST_SAMPLES: usize = 4096;
 
+/// Hits per scene and precision whose distance the report compares with the oracle's: at
+/// `watertight::DISTANCE_SAMPLES` (1,024) they took about 4 s per scene of the torus and the
+/// fur (2026-12-03, 2-core machine), a third of the watertightness section.
+const REPORT_DISTANCE_SAMPLES: usize = 256;
+
+/// Image size of the default job (`cargo run --release`): 320 x 240, the size of
+/// `nlrt report`, took 129 s of its scene renders (2026-12-03, 2-core machine, the whole job
+/// 176 s), too near its 3 minutes on a loaded machine; 256 x 192 has 0.64 of the pixels.
+const DEFAULT_JOB_SIZE: (usize, usize) = (256, 192);
+
 /// Side of the report's watertightness grid (16,384 rays per scene): at 256^2 the section
 /// took 72 s of the default job (2026-12-03, 2-core machine), which must stay under 3
 /// minutes; `nlrt watertight --rays N` judges as many as asked (the 1M-ray tables of
@@ -418,7 +428,10 @@ fn report_command(output: PathBuf, args: &RenderArgs, solver_samples: usize) -> 
         let Some(scene) = scenes::builtin(name, args.scene_size.into()) else {
             continue;
         };
-        let judged_hits = watertight::JudgedHits::Spaced(REPORT_GHOST_SAMPLES);
+        let judged_hits = watertight::JudgedHits::Spaced {
+            ghosts: REPORT_GHOST_SAMPLES,
+            distances: REPORT_DISTANCE_SAMPLES,
+        };
         let reports = match watertight::measure_all(
             &scene,
             REPORT_WATERTIGHT_GRID,
@@ -554,7 +567,7 @@ fn main() -> ExitCode {
     let Some(command) = cli.command else {
         eprintln!("nlrt: no command given; running `nlrt report` (see `nlrt --help`)");
         let args = RenderArgs {
-            size: (320, 240),
+            size: DEFAULT_JOB_SIZE,
             spp: 1,
             bounces: 1,
             scene_size: SceneSize::Small,
@@ -871,7 +884,10 @@ fn main() -> ExitCode {
             println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
             let methods: Vec<Method> = methods.collect();
             let judged_hits = ghost_samples.map_or(watertight::JudgedHits::Every, |n| {
-                watertight::JudgedHits::Spaced(usize::try_from(n).unwrap_or(usize::MAX))
+                watertight::JudgedHits::Spaced {
+                    ghosts: usize::try_from(n).unwrap_or(usize::MAX),
+                    distances: watertight::DISTANCE_SAMPLES,
+                }
             });
             let at = frame.map(|k| (k as usize, frames as usize));
             let reports =

@@ -636,7 +636,9 @@ fn measure_in<T: Real>(
             .count();
         let nonlinear = !(affine || marching || tetrahedra || map.is_some());
         let truth = nonlinear.then(|| (TrueSurface::new(surface), grid_hits(scene, surface, n)));
-        let distance_error = truth.as_ref().map(|(t, hits)| distance_error(hits, t));
+        let distance_error = truth
+            .as_ref()
+            .map(|(t, hits)| distance_error(hits, t, judged_hits.distance_samples()));
         let ghosts = truth
             .as_ref()
             .map(|(t, hits)| ghost_count(hits, t, n, judged_hits));
@@ -863,10 +865,28 @@ enum HitJudgement {
 /// Which hits of a grid the oracle judges for [`GhostCount`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum JudgedHits {
-    /// Every hit (`nlrt watertight`; about 0.3 ms of one core per hit).
+    /// Every hit (`nlrt watertight`; about 0.3 ms of one core per hit), and
+    /// [`DISTANCE_SAMPLES`] hits for the [`DistanceError`].
     Every,
-    /// About this many, evenly spaced over the hits in grid order (the report).
-    Spaced(usize),
+    /// About `ghosts` hits for ghosts and `distances` for the [`DistanceError`], each evenly
+    /// spaced over the hits in grid order (the report, which must stay within its minutes).
+    Spaced {
+        /// Hits judged for ghosts.
+        ghosts: usize,
+        /// Hits whose distance is compared with the oracle's (about 18 oracle solves each,
+        /// several times a ghost judgement, which usually settles at the hit texel).
+        distances: usize,
+    },
+}
+
+impl JudgedHits {
+    /// Hits sampled for the [`DistanceError`].
+    fn distance_samples(self) -> usize {
+        match self {
+            JudgedHits::Every => DISTANCE_SAMPLES,
+            JudgedHits::Spaced { distances, .. } => distances,
+        }
+    }
 }
 
 /// A grid ray that hit: its cell (row-major), the ray and the nonlinear tracer's hit.
@@ -899,7 +919,7 @@ fn ghost_count<T: Real>(
 ) -> GhostCount {
     let stride = match which {
         JudgedHits::Every => 1,
-        JudgedHits::Spaced(count) => hits.len().div_ceil(count.max(1)).max(1),
+        JudgedHits::Spaced { ghosts, .. } => hits.len().div_ceil(ghosts.max(1)).max(1),
     };
     let judged: Vec<(u32, HitJudgement)> = hits
         .par_iter()
@@ -940,9 +960,13 @@ fn ghost_count<T: Real>(
     }
 }
 
-/// [`DistanceError`] over about [`DISTANCE_SAMPLES`] evenly spaced `hits`.
-fn distance_error<T: Real>(hits: &[GridHit<T>], truth: &TrueSurface<'_, T>) -> DistanceError {
-    let stride = hits.len().div_ceil(DISTANCE_SAMPLES).max(1);
+/// [`DistanceError`] over about `samples` evenly spaced `hits`.
+fn distance_error<T: Real>(
+    hits: &[GridHit<T>],
+    truth: &TrueSurface<'_, T>,
+    samples: usize,
+) -> DistanceError {
+    let stride = hits.len().div_ceil(samples.max(1)).max(1);
     let errors: Vec<Option<f64>> = hits
         .par_iter()
         .step_by(stride)
