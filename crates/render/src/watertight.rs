@@ -862,7 +862,7 @@ enum HitJudgement {
     TooFar,
 }
 
-/// Which hits of a grid the oracle judges for [`GhostCount`].
+/// Which hits of a grid the oracle judges for [`GhostCount`] and for the [`DistanceError`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum JudgedHits {
     /// Every hit (`nlrt watertight`; about 0.3 ms of one core per hit), and
@@ -887,6 +887,11 @@ impl JudgedHits {
             JudgedHits::Spaced { distances, .. } => distances,
         }
     }
+}
+
+/// The stride that takes about `count` (at least one) evenly spaced items of `len`.
+fn spacing(len: usize, count: usize) -> usize {
+    len.div_ceil(count.max(1)).max(1)
 }
 
 /// A grid ray that hit: its cell (row-major), the ray and the nonlinear tracer's hit.
@@ -919,7 +924,7 @@ fn ghost_count<T: Real>(
 ) -> GhostCount {
     let stride = match which {
         JudgedHits::Every => 1,
-        JudgedHits::Spaced { ghosts, .. } => hits.len().div_ceil(ghosts.max(1)).max(1),
+        JudgedHits::Spaced { ghosts, .. } => spacing(hits.len(), ghosts),
     };
     let judged: Vec<(u32, HitJudgement)> = hits
         .par_iter()
@@ -966,7 +971,7 @@ fn distance_error<T: Real>(
     truth: &TrueSurface<'_, T>,
     samples: usize,
 ) -> DistanceError {
-    let stride = hits.len().div_ceil(samples.max(1)).max(1);
+    let stride = spacing(hits.len(), samples);
     let errors: Vec<Option<f64>> = hits
         .par_iter()
         .step_by(stride)
