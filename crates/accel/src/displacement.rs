@@ -2,7 +2,7 @@
 //! traversed by nonlinear rays (Ogaki 2023, sec. 4.4, 5.1, 5.4).
 
 use core::fmt;
-use nlrt_poly::{Real, Vector3};
+use nlrt_poly::{Real, Vector2, Vector3};
 use nlrt_poly::{decided_sign, solve_cubic_in, solve_quadratic_in};
 use nlrt_shellmap::{
     BaseEdges, Hit, NonlinearRay, Prism, Ray, TextureCurve, TexturePlane, alpha_beta_eq11,
@@ -14,6 +14,7 @@ use crate::cells::{CURVE_STACK, walk_cells};
 use crate::heightfield::{HEIGHT_ONE, HeightField};
 use crate::mesh::{BaseMesh, MeshError};
 use crate::pose::{PoseUpdate, TlasUpdate};
+use crate::seam::{EDGE_VERTICES, NO_SEAM, SeamRule, Seams, edge_parameter};
 use crate::stats::TraversalStats;
 use crate::tlas::{MAX_TEXEL_COORDINATE, PrismTlas, RootNodes, SetupError};
 
@@ -45,6 +46,10 @@ impl fmt::Display for DisplacementError {
     }
 }
 
+/// The side walls over the base edges as planes in canonical coordinates
+/// `(n_alpha, n_beta, n_h, K)` (Eq. 10): `alpha = 0`, `beta = 0`, `alpha + beta = 1`.
+const WALL_PLANES: [[i32; 4]; 3] = [[1, 0, 0, 0], [0, 1, 0, 0], [1, 1, 0, -1]];
+
 /// Which part of a texel was hit.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum TexelPart {
@@ -54,6 +59,13 @@ pub enum TexelPart {
     Upper,
     /// The whole texel, flat (all four corners at one height; sec. 5.4).
     Flat,
+    /// The seam wall on base edge `edge` ([`crate::EDGE_VERTICES`]) of the hit's triangle,
+    /// between the two sides' heights ([`SeamRule::Closed`]); `texel` is the texel of this
+    /// side at the hit.
+    Wall {
+        /// The base edge.
+        edge: u8,
+    },
 }
 
 /// A hit on a displaced surface.
@@ -76,12 +88,16 @@ pub struct DisplacedSurface<T: Real> {
     pub(crate) prisms: PrismTlas<T>,
     pub(crate) field: HeightField,
     pub(crate) texel_size: T,
+    seams: Seams,
+    seam_rule: SeamRule,
 }
 
 impl<T: Real> DisplacedSurface<T> {
     /// Builds the surface: validates parameters, finds each triangle's root nodes and builds
     /// the TLAS over the prisms (one prism per leaf). `tiling` is the number of repeats of the
-    /// height map per unit of uv (the fur torus uses 8).
+    /// height map per unit of uv (the fur torus uses 8). Seams of the mesh are closed
+    /// ([`SeamRule::Closed`]: welded displacement directions and seam walls); a mesh without
+    /// seams is traced as it is.
     ///
     /// # Errors
     /// A non-finite height scale, a tiling that is not finite and positive, or texture
@@ -92,7 +108,61 @@ impl<T: Real> DisplacedSurface<T> {
         height_scale: T,
         tiling: T,
     ) -> Result<Self, DisplacementError> {
+        Self::with_seam_rule(mesh, field, height_scale, tiling, SeamRule::Closed)
+    }
+
+    /// [`DisplacedSurface::new`] with the seams treated by `rule` ([`SeamRule::Open`] keeps
+    /// the cracks, to measure them).
+    ///
+    /// ```
+    /// use nlrt_accel::{BaseMesh, DisplacedSurface, HeightField, SeamRule, TexelPart, TraversalStats, Wrap, HEIGHT_ONE};
+    /// use nlrt_poly::glam::{DVec2, DVec3};
+    /// use nlrt_shellmap::Ray;
+    /// // A unit square whose two triangles take their uvs from different parts of a clamped
+    /// // map: heights 1 right of its middle, 0 left of it. The lower-right triangle is
+    /// // displaced by the full height scale, the upper-left one not at all: a step along the
+    /// // diagonal they share.
+    /// let p = [DVec3::ZERO, DVec3::X, DVec3::new(1.0, 1.0, 0.0), DVec3::Y];
+    /// let positions = vec![p[0], p[1], p[2], p[0], p[2], p[3]];
+    /// let uvs: Vec<DVec2> = positions.iter().enumerate().map(|(i, q)| {
+    ///     let shift = if i < 3 { DVec2::new(0.5, 0.0) } else { DVec2::new(-0.5, 0.0) };
+    ///     DVec2::new(q.x, q.y) * 0.25 + shift
+    /// }).collect();
+    /// let mesh = BaseMesh::new(positions, vec![DVec3::Z; 6], uvs, vec![[0, 1, 2], [3, 4, 5]]).unwrap();
+    /// let field = HeightField::new(2, vec![0, HEIGHT_ONE, 0, HEIGHT_ONE], Wrap::Clamp).unwrap();
+    /// // A ray at height 0.25 crossing the diagonal at (0.4, 0.4), from above the low side
+    /// // into the high side's shell under its surface: only the seam wall stops it.
+    /// let ray = Ray::new(DVec3::new(-1.0, 1.8, 0.25), DVec3::new(1.0, -1.0, 0.0)).unwrap();
+    /// let closed = DisplacedSurface::new(mesh.clone(), field.clone(), 0.5, 1.0).unwrap();
+    /// let hit = closed.intersect(&ray, 0.0, f64::INFINITY, &mut TraversalStats::default());
+    /// let hit = hit.unwrap();
+    /// assert!(matches!(hit.part, TexelPart::Wall { .. }));
+    /// assert!((hit.hit.t - 1.4 * 2f64.sqrt()).abs() < 1e-12);
+    /// let open = DisplacedSurface::with_seam_rule(mesh, field, 0.5, 1.0, SeamRule::Open).unwrap();
+    /// assert!(open.intersect(&ray, 0.0, f64::INFINITY, &mut TraversalStats::default()).is_none());
+    /// ```
+    ///
+    /// # Errors
+    /// As [`DisplacedSurface::new`].
+    pub fn with_seam_rule(
+        mesh: BaseMesh<T>,
+        field: HeightField,
+        height_scale: T,
+        tiling: T,
+        rule: SeamRule,
+    ) -> Result<Self, DisplacementError> {
         let side = field.side() as f64;
+        let repeats = field.wrap() == crate::Wrap::Repeat;
+        let seams = Seams::find(&mesh, tiling.to_f64(), repeats);
+        let mut mesh = mesh;
+        if rule == SeamRule::Closed {
+            let welded = seams.welded_normals::<T>(mesh.normals());
+            if welded.as_slice() != mesh.normals() {
+                let positions = mesh.positions().to_vec();
+                // Welded normals of finite normals are finite: the pose is accepted.
+                let _ = mesh.set_pose(&positions, &welded);
+            }
+        }
         let prisms = PrismTlas::new(mesh, height_scale, tiling, side).map_err(|e| match e {
             SetupError::HeightScale(v) => DisplacementError::BadHeightScale(v),
             SetupError::Tiling(v) => DisplacementError::BadTiling(v),
@@ -102,7 +172,21 @@ impl<T: Real> DisplacedSurface<T> {
             prisms,
             field,
             texel_size: T::ONE / T::from_f64(side),
+            seams,
+            seam_rule: rule,
         })
+    }
+
+    /// The base mesh's seams (found whatever the rule).
+    #[must_use]
+    pub fn seams(&self) -> &Seams {
+        &self.seams
+    }
+
+    /// How seams are treated.
+    #[must_use]
+    pub fn seam_rule(&self) -> SeamRule {
+        self.seam_rule
     }
 
     /// The base mesh.
@@ -160,6 +244,14 @@ impl<T: Real> DisplacedSurface<T> {
         normals: &[T::Vec3],
         update: TlasUpdate,
     ) -> Result<PoseUpdate, MeshError> {
+        let vertices = self.mesh().positions().len();
+        if self.seam_rule == SeamRule::Closed
+            && positions.len() == vertices
+            && normals.len() == vertices
+        {
+            let welded = self.seams.welded_normals::<T>(normals);
+            return self.prisms.set_pose(positions, &welded, update);
+        }
         self.prisms.set_pose(positions, normals, update)
     }
 
@@ -260,6 +352,7 @@ impl<T: Real> DisplacedSurface<T> {
                 normal: T::Vec3::new(T::ZERO, T::ZERO, T::ONE),
                 k: -h00,
             }),
+            TexelPart::Wall { .. } => None,
         }
     }
 
@@ -615,7 +708,8 @@ impl<T: Real> DisplacedSurface<T> {
     ) -> Option<SurfaceHit<T>> {
         self.prisms
             .intersect(ray, t_min, t_max, stats, |tri, prism, nl, t_max, stats| {
-                let hit = self.intersect_blas(tri, prism, nl, t_min, t_max, stats)?;
+                let hit = self.intersect_blas(tri, prism, nl, t_min, t_max, stats);
+                let hit = self.nearer_wall_hit(tri, prism, nl, t_min, t_max, hit)?;
                 Some((hit, hit.hit.t))
             })
     }
@@ -625,9 +719,209 @@ impl<T: Real> DisplacedSurface<T> {
     pub fn intersect_brute_force(&self, ray: &Ray<T>, t_min: T, t_max: T) -> Option<SurfaceHit<T>> {
         self.prisms
             .intersect_brute_force(ray, t_max, |tri, prism, nl, t_max| {
-                let hit = self.intersect_blas_brute_force(tri, prism, nl, t_min, t_max)?;
+                let hit = self.intersect_blas_brute_force(tri, prism, nl, t_min, t_max);
+                let hit = self.nearer_wall_hit(tri, prism, nl, t_min, t_max, hit)?;
                 Some((hit, hit.hit.t))
             })
+    }
+
+    /// `hit`, or a nearer hit on a seam wall of triangle `tri` (only with
+    /// [`SeamRule::Closed`] on a mesh with seams: elsewhere this is one length test).
+    #[inline]
+    fn nearer_wall_hit(
+        &self,
+        tri: usize,
+        prism: &Prism<T>,
+        ray: &NonlinearRay<T>,
+        t_min: T,
+        t_max: T,
+        hit: Option<SurfaceHit<T>>,
+    ) -> Option<SurfaceHit<T>> {
+        if self.seam_rule == SeamRule::Open {
+            return hit;
+        }
+        let Some(walls) = self.seams.of_triangle(tri) else {
+            return hit;
+        };
+        let t_max = hit.map_or(t_max, |h| h.hit.t);
+        self.wall_hit(tri, walls, prism, ray, t_min, t_max).or(hit)
+    }
+
+    /// The nearest hit with `t` in `[t_min, t_max]` on the seam walls of triangle `tri`
+    /// (`walls`: its edges' seam indices). The ray crosses base edge `k`'s side wall where the
+    /// edge's quadratic vanishes (`BaseEdges`); the wall is there when the crossing's height
+    /// lies between the two sides' surface heights at its edge parameter. Both prisms of a
+    /// seam test it, each from its own crossing, and each conservatively: the crossing's
+    /// height is known within the base-edge window `w` (which bounds its rounding), its edge
+    /// parameter within the parameters at `h - w` and `h + w`, and the two surfaces'
+    /// heights within their values there plus their slope times that spread
+    /// ([`DisplacedSurface::wall_covers`]); a ray is stopped if any height it may have there
+    /// lies on the wall. So no ray slips through between a wall and the surfaces it joins.
+    fn wall_hit(
+        &self,
+        tri: usize,
+        walls: &[u32; 3],
+        prism: &Prism<T>,
+        ray: &NonlinearRay<T>,
+        t_min: T,
+        t_max: T,
+    ) -> Option<SurfaceHit<T>> {
+        let edges = BaseEdges::new(ray);
+        let (mut best, mut t_max) = (None, t_max);
+        // A little beyond the wall's height range [0, 1], so that a crossing which rounding
+        // moved out of it is still found; `wall_covers` decides.
+        let reach = T::from_f64(1.0 / 1024.0);
+        for (k, &seam) in walls.iter().enumerate() {
+            if seam == NO_SEAM {
+                continue;
+            }
+            for &h in solve_quadratic_in(edges.edges[k], -reach, T::ONE + reach).iter() {
+                let w = edges.window(k, h).min(T::ONE);
+                if !self.wall_covers(tri, k, seam as usize, ray, h.to_f64(), w.to_f64()) {
+                    continue;
+                }
+                let abh = WALL_PLANES[k].map(T::from_i32);
+                let Some((alpha, beta)) = alpha_beta_eq11(ray, &abh, h) else {
+                    continue;
+                };
+                // Onto the edge segment (the crossing is on it up to rounding).
+                let s = edge_parameter(k, alpha, beta).max(T::ZERO).min(T::ONE);
+                let (alpha, beta) = match k {
+                    0 => (T::ZERO, s),
+                    1 => (s, T::ZERO),
+                    _ => (T::ONE - s, s),
+                };
+                let t = ray.signed_distance(prism, alpha, beta, h);
+                if !(t >= t_min && t <= t_max) {
+                    continue;
+                }
+                t_max = t;
+                let hit = Hit::at(prism, t, alpha, beta, h);
+                let texel = [hit.u, hit.v].map(|c| {
+                    let x = (c / self.texel_size).to_f64();
+                    let x = x as i64 as f64 - f64::from(u8::from(x < (x as i64) as f64));
+                    x as i32
+                });
+                best = Some(SurfaceHit {
+                    hit,
+                    triangle: tri as u32,
+                    texel,
+                    part: TexelPart::Wall { edge: k as u8 },
+                });
+            }
+        }
+        best
+    }
+
+    /// Whether the seam wall on base edge `k` of triangle `tri` (seam `seam`) may hold the
+    /// ray's crossing at height `h`, known within `w` (see [`DisplacedSurface::wall_hit`]).
+    /// Evaluated in f64 on the tracer's values, whose own rounding (1e-16 relative) is
+    /// covered by the `SLACK` below.
+    fn wall_covers(
+        &self,
+        tri: usize,
+        k: usize,
+        seam: usize,
+        ray: &NonlinearRay<T>,
+        h: f64,
+        w: f64,
+    ) -> bool {
+        // f64 rounding of the evaluations below, on values in [0, 1] (heights, edge
+        // parameters): some 100 ulps of 1.
+        const SLACK: f64 = 1e-14;
+        let fma = <f64 as Real>::mul_add;
+        let q = |c: &[T; 3], x: f64| fma(fma(c[2].to_f64(), x, c[1].to_f64()), x, c[0].to_f64());
+        let parameter = |x: f64| {
+            let d = q(&ray.d, x);
+            let (alpha, beta) = (q(&ray.alpha, x) / d, q(&ray.beta, x) / d);
+            let s = edge_parameter(k, alpha, beta);
+            s.is_finite().then_some(s)
+        };
+        let Some(s) = parameter(h) else {
+            return false;
+        };
+        let (mut s_lo, mut s_hi) = (s, s);
+        for x in [h - w, h + w] {
+            match parameter(x) {
+                Some(v) => {
+                    s_lo = s_lo.min(v);
+                    s_hi = s_hi.max(v);
+                }
+                // A pole of Eq. 8 in the window: the parameter is unknown there.
+                None => return true,
+            }
+        }
+        let (s_lo, s_hi) = (s_lo - SLACK, s_hi + SLACK);
+        if s_hi < 0.0 || s_lo > 1.0 {
+            return false;
+        }
+        let (s_lo, s_hi) = (s_lo.max(0.0), s_hi.min(1.0));
+        let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+        let mut slope = [0.0f64; 2];
+        for x in [s_lo, s.max(0.0).min(1.0), s_hi] {
+            let Some(sides) = self.seam_heights_of(tri, k, seam, x) else {
+                return false;
+            };
+            for (side, (height, local)) in sides.into_iter().enumerate() {
+                lo = lo.min(height);
+                hi = hi.max(height);
+                slope[side] = slope[side].max(local);
+            }
+        }
+        // Between the samples a surface moves by at most its slope times the spread.
+        let spread = slope[0].max(slope[1]) * (s_hi - s_lo);
+        let (lo, hi) = (lo - spread, hi + spread);
+        h + w >= lo - SLACK && h - w <= hi + SLACK
+    }
+
+    /// The two sides' surface heights (in `[0, 1]`, f64) at parameter `s` of base edge `edge`
+    /// of triangle `tri`, this triangle's first, when that edge is a seam; `None` otherwise.
+    /// The seam wall there spans the heights between them ([`SeamRule::Closed`]).
+    #[must_use]
+    pub fn seam_heights(&self, tri: usize, edge: usize, s: f64) -> Option<[f64; 2]> {
+        let seam = *self.seams.of_triangle(tri)?.get(edge)?;
+        if seam == NO_SEAM {
+            return None;
+        }
+        self.seam_heights_of(tri, edge, seam as usize, s)
+            .map(|sides| sides.map(|(height, _)| height))
+    }
+
+    /// [`DisplacedSurface::seam_heights`] of seam `seam`, each with a bound on its slope per
+    /// unit of `s` (the texel's slope times the edge's length in texels).
+    fn seam_heights_of(
+        &self,
+        tri: usize,
+        k: usize,
+        seam: usize,
+        s: f64,
+    ) -> Option<[(f64, f64); 2]> {
+        let edge = self.seams.edges().get(seam)?;
+        let own = edge
+            .sides
+            .iter()
+            .position(|side| side.triangle as usize == tri && usize::from(side.edge) == k)?;
+        let texels = self.field.side() as f64;
+        let side_height = |index: usize| {
+            let side = edge.sides[index];
+            let prism = self.prism(side.triangle as usize);
+            let [i, j] = EDGE_VERTICES[usize::from(side.edge)];
+            // `s` is this triangle's parameter; the other side's runs the other way when the
+            // seam is reversed.
+            let t = if edge.reversed && index != own {
+                1.0 - s
+            } else {
+                s
+            };
+            let texel = |c: T| c.to_f64() * texels;
+            let (a, b) = (prism.uv[i], prism.uv[j]);
+            let (ax, ay) = (texel(Vector2::x(a)), texel(Vector2::y(a)));
+            let (bx, by) = (texel(Vector2::x(b)), texel(Vector2::y(b)));
+            let length = nlrt_poly::Real::sqrt((bx - ax) * (bx - ax) + (by - ay) * (by - ay));
+            let (height, slope) = self.field.height_at(ax + (bx - ax) * t, ay + (by - ay) * t);
+            (height, slope * length)
+        };
+        Some([side_height(own), side_height(1 - own)])
     }
 
     /// The world-space unit normal at a hit (Eq. 13), facing against the ray direction `dir`;
@@ -648,6 +942,11 @@ impl<T: Real> DisplacedSurface<T> {
             }
             TexelPart::Upper => {
                 TexturePlane::through(&[p(u0, v0, h00), p(u1, v1, h11), p(u0, v1, h01)])?
+            }
+            TexelPart::Wall { edge } => {
+                let abh = WALL_PLANES[usize::from(edge)].map(T::from_i32);
+                let n = world_normal(&prism, &abh, hit.hit.alpha, hit.hit.beta, hit.hit.h);
+                return facing_unit::<T>(n, dir);
             }
         };
         let n = world_normal(
@@ -676,6 +975,121 @@ mod tests {
     use alloc::vec;
     use alloc::vec::Vec;
     use nlrt_poly::glam::{DVec2, DVec3};
+
+    /// A mesh of two unit squares: the first (x in [0, 1]) split along its diagonal by a uv
+    /// seam (its halves take their uvs from different places of a clamped random map) and a
+    /// normal seam (the halves' copies of the diagonal's ends tilt differently); the second (x
+    /// in [2, 3]) with shared vertices and no seam.
+    fn seamed_and_plain_squares() -> (BaseMesh<f64>, HeightField) {
+        let mut positions = Vec::new();
+        let (mut normals, mut uvs, mut triangles) = (Vec::new(), Vec::new(), Vec::new());
+        let square = [DVec3::ZERO, DVec3::X, DVec3::new(1.0, 1.0, 0.0), DVec3::Y];
+        let tilt = |x: f64, y: f64| DVec3::new(x, y, 1.0).normalize();
+        // Seamed: (p0, p1, p2) and (p0, p2, p3) on their own vertices.
+        for (k, (tri, shift, n)) in [
+            ([0, 1, 2], DVec2::new(0.55, 0.1), tilt(0.2, -0.1)),
+            ([0, 2, 3], DVec2::new(0.05, 0.5), tilt(-0.15, 0.2)),
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            for v in tri {
+                let p = square[v];
+                positions.push(p);
+                normals.push(if v == 0 || v == 2 { n } else { DVec3::Z });
+                uvs.push(DVec2::new(p.x, p.y) * 0.4 + shift);
+            }
+            let b = 3 * k as u32;
+            triangles.push([b, b + 1, b + 2]);
+        }
+        // Plain: four shared vertices.
+        let b = positions.len() as u32;
+        for p in square {
+            positions.push(p + DVec3::new(2.0, 0.0, 0.0));
+            normals.push(tilt(p.x * 0.2 - 0.1, p.y * 0.1));
+            uvs.push(DVec2::new(p.x, p.y) * 0.9 + DVec2::splat(0.05));
+        }
+        triangles.push([b, b + 1, b + 2]);
+        triangles.push([b, b + 2, b + 3]);
+        let mesh = BaseMesh::new(positions, normals, uvs, triangles).unwrap();
+        let side = 16;
+        let mut state = 0x2545_f491_4f6c_dd1d_u64;
+        let heights: Vec<f32> = (0..side * side)
+            .map(|_| {
+                state = state
+                    .wrapping_mul(6_364_136_223_846_793_005)
+                    .wrapping_add(1_442_695_040_888_963_407);
+                (state >> 40) as f32 / (1u64 << 24) as f32
+            })
+            .collect();
+        let field = HeightField::from_unit_heights(side, &heights, Wrap::Clamp).unwrap();
+        (mesh, field)
+    }
+
+    /// Seam walls: the accelerated walk and testing every texel find the same nearest hits
+    /// with them; rays through the seamed square's crack miss without the rule and hit with
+    /// it; and every hit on the plain square is bit-identical with and without the rule.
+    #[test]
+    fn seam_walls_close_the_crack_and_change_nothing_elsewhere() {
+        let (mesh, field) = seamed_and_plain_squares();
+        let closed = DisplacedSurface::new(mesh.clone(), field.clone(), 0.3, 1.0).unwrap();
+        let open = DisplacedSurface::with_seam_rule(mesh, field, 0.3, 1.0, SeamRule::Open).unwrap();
+        assert_eq!(closed.seams().edges().len(), 1);
+        assert!(closed.seams().edges()[0].uv_differs && closed.seams().edges()[0].normal_differs);
+        // Welded: the seam's ends share one direction in the closed surface only.
+        let n = closed.mesh().normals();
+        assert!(
+            n[0] == n[3] && n[2] == n[4] && open.mesh().normals()[0] != open.mesh().normals()[3]
+        );
+        let (mut walls, mut closed_cracks, mut plain) = (0, 0, 0);
+        for i in 0..60 {
+            for j in 0..60 {
+                let (a, b) = (f64::from(i) / 59.0, f64::from(j) / 59.0);
+                // Low grazing rays across the diagonal, and steep ones over both squares.
+                let rays = [
+                    Ray::new(
+                        DVec3::new(-0.5 + 1.2 * a, 1.5, 0.02 + 0.3 * b),
+                        DVec3::new(0.7, -1.0, -0.05),
+                    ),
+                    Ray::new(
+                        DVec3::new(-0.2 + 3.4 * a, -0.2 + 1.4 * b, 1.0),
+                        DVec3::new(0.3, 0.2, -1.0),
+                    ),
+                ];
+                for ray in rays.into_iter().flatten() {
+                    let mut stats = TraversalStats::default();
+                    let c = closed.intersect(&ray, 0.0, f64::INFINITY, &mut stats);
+                    let brute = closed.intersect_brute_force(&ray, 0.0, f64::INFINITY);
+                    match (c, brute) {
+                        (None, None) => {}
+                        (Some(x), Some(y)) => {
+                            assert!((x.hit.t - y.hit.t).abs() < 1e-12, "{x:?} {y:?}")
+                        }
+                        other => panic!("walk and brute force differ: {other:?}"),
+                    }
+                    let o = open.intersect(&ray, 0.0, f64::INFINITY, &mut stats);
+                    if let Some(hit) = c
+                        && matches!(hit.part, TexelPart::Wall { .. })
+                    {
+                        walls += 1;
+                        closed_cracks +=
+                            usize::from(o.is_none_or(|o| o.hit.t > hit.hit.t * (1.0 + 1e-6)));
+                    }
+                    if let Some(o) = o
+                        && o.triangle >= 2
+                    {
+                        // The plain square: the same hit, bit for bit.
+                        assert_eq!(c, Some(o));
+                        plain += 1;
+                    }
+                }
+            }
+        }
+        assert!(
+            walls > 100 && closed_cracks > 100 && plain > 500,
+            "{walls} {closed_cracks} {plain}"
+        );
+    }
 
     /// A walk whose stack is too small for its pieces gives up and finishes the triangle by
     /// box tests: the same nearest hits as the full walk and as testing every texel, and the

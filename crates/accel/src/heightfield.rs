@@ -187,6 +187,45 @@ impl HeightField {
         ]
     }
 
+    /// The height of the microtriangle surface at the texel-grid point `(x, y)` (texture
+    /// coordinates times the map's side), in `[0, 1]`, evaluated in f64: the texel's two
+    /// microtriangles share the diagonal from its `(0, 0)` to its `(1, 1)` corner, as in the
+    /// tracers. With it, the bound on the surface's slope in that texel (height per texel,
+    /// the largest of its microtriangles' gradient lengths, at most `sqrt 2` times the corner
+    /// range).
+    ///
+    /// ```
+    /// use nlrt_accel::{HeightField, Wrap, HEIGHT_ONE};
+    /// let field = HeightField::new(2, vec![0, HEIGHT_ONE, 0, HEIGHT_ONE], Wrap::Clamp).unwrap();
+    /// let (h, slope) = field.height_at(0.25, 0.5);
+    /// assert_eq!(h, 0.25);
+    /// assert!(slope >= 1.0);
+    /// ```
+    #[must_use]
+    pub fn height_at(&self, x: f64, y: f64) -> (f64, f64) {
+        // floor without std or libm, exact for the texel coordinates a mesh may have (below
+        // MAX_TEXEL_COORDINATE, far within i64).
+        let floor = |v: f64| {
+            let t = v as i64 as f64;
+            if t > v { t - 1.0 } else { t }
+        };
+        let (tx, ty) = (floor(x), floor(y));
+        let (fx, fy) = (x - tx, y - ty);
+        let unit = f64::from(HEIGHT_ONE);
+        let c = self
+            .texel_corners(tx as i64, ty as i64)
+            .map(|s| f64::from(s) / unit);
+        let height = if fx >= fy {
+            c[0] + fx * (c[1] - c[0]) + fy * (c[3] - c[1])
+        } else {
+            c[0] + fy * (c[2] - c[0]) + fx * (c[3] - c[2])
+        };
+        let length = |a: f64, b: f64| nlrt_poly::Real::sqrt(a * a + b * b);
+        let lower = length(c[1] - c[0], c[3] - c[1]);
+        let upper = length(c[2] - c[0], c[3] - c[2]);
+        (height, lower.max(upper))
+    }
+
     /// `(min, max)` sample over the node `(x, y)` of `level` (any integers: the grid is
     /// infinite and wraps). Levels above the top cover several tiles and get the whole map's
     /// range (with [`Wrap::Clamp`] a node outside the tile still reads edge samples, inside

@@ -11,6 +11,8 @@
 //!   texel discard, nearest-first order, range reduction, flat-texel shortcut).
 //! - [`ShellSurface`]: an object in texture space ([`ShellObject`], with its own BVH)
 //!   tiled over the base mesh: TLAS + implicit quadtree over tiles + the object's BVH.
+//! - Crack-free uv and normal seams: [`Seams`] finds them, [`SeamRule::Closed`] (the
+//!   default) welds displacement directions there and joins the two sides by a seam wall.
 //! - Animated base meshes: `set_pose` on either surface moves the mesh and refits or
 //!   rebuilds only the TLAS ([`TlasUpdate`]); the texture-space data stays untouched.
 //!
@@ -45,6 +47,7 @@ mod displacement;
 mod heightfield;
 mod mesh;
 mod pose;
+mod seam;
 mod shell;
 mod stats;
 mod tlas;
@@ -55,6 +58,7 @@ pub use displacement::{DisplacedSurface, DisplacementError, SurfaceHit, TexelPar
 pub use heightfield::{HEIGHT_ONE, HeightField, HeightMapError, Wrap};
 pub use mesh::{BaseMesh, MeshError, prism_bounds};
 pub use pose::{PoseUpdate, TlasUpdate};
+pub use seam::{EDGE_VERTICES, NO_SEAM, SeamEdge, SeamRule, SeamSide, Seams, edge_parameter};
 pub use shell::{ShellError, ShellHit, ShellObject, ShellSurface};
 pub use stats::TraversalStats;
 pub use tlas::{MAX_TEXEL_COORDINATE, RootNodes};

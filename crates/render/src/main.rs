@@ -22,6 +22,10 @@ use std::process::ExitCode;
 struct Cli {
     #[command(subcommand)]
     command: Option<Command>,
+    /// Leave the base mesh's uv and normal seams open (no welded displacement directions, no
+    /// seam walls), to see and measure the cracks the seam rule closes.
+    #[arg(long, global = true)]
+    no_seam_fix: bool,
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
@@ -369,12 +373,19 @@ fn scene_help(what: &str) -> String {
 }
 
 /// A built-in scene by name, or a scene file (`*.toml`).
-fn resolve_scene(name: &str, size: Size) -> Result<scenes::Scene, String> {
-    if name.ends_with(".toml") {
-        return nlrt_render::scene_file::load(std::path::Path::new(name));
-    }
-    check_scenes(&[name.to_string()])?;
-    scenes::builtin(name, size).ok_or_else(|| format!("unknown scene '{name}'"))
+fn resolve_scene(
+    name: &str,
+    size: Size,
+    seam_rule: nlrt_accel::SeamRule,
+) -> Result<scenes::Scene, String> {
+    let mut scene = if name.ends_with(".toml") {
+        nlrt_render::scene_file::load(std::path::Path::new(name))?
+    } else {
+        check_scenes(&[name.to_string()])?;
+        scenes::builtin(name, size).ok_or_else(|| format!("unknown scene '{name}'"))?
+    };
+    scene.seam_rule = seam_rule;
+    Ok(scene)
 }
 
 /// Hits per scene and precision the report judges for ghosts: the oracle's 0.3 ms per hit
@@ -402,7 +413,12 @@ const REPORT_WATERTIGHT_GRID: usize = 128;
 /// `nlrt solvers --samples` for more): 50,000 took 31 s of the default job (same run).
 const REPORT_SOLVER_SAMPLES: usize = 20_000;
 
-fn report_command(output: PathBuf, args: &RenderArgs, solver_samples: usize) -> ExitCode {
+fn report_command(
+    output: PathBuf,
+    args: &RenderArgs,
+    solver_samples: usize,
+    seam_rule: nlrt_accel::SeamRule,
+) -> ExitCode {
     if let Err(e) = std::fs::create_dir_all(&output) {
         return fail("report", format!("cannot create {}: {e}", output.display()));
     }
@@ -414,6 +430,7 @@ fn report_command(output: PathBuf, args: &RenderArgs, solver_samples: usize) -> 
         out_dir: Some(output.clone()),
         scaling: false,
         ray_stream: false,
+        seam_rule,
     };
     let start = std::time::Instant::now();
     let scenes_md = match report::run(&opts) {
@@ -511,10 +528,11 @@ fn animate_command(
     rebuild_frames: usize,
     verify: bool,
     output: PathBuf,
+    seam_rule: nlrt_accel::SeamRule,
 ) -> ExitCode {
     use nlrt_render::animate::{self, AnimateOptions};
     use nlrt_render::animation::Motion;
-    let mut built = match resolve_scene(scene, args.scene_size.into()) {
+    let mut built = match resolve_scene(scene, args.scene_size.into(), seam_rule) {
         Ok(s) => s,
         Err(e) => return fail("animate", e),
     };
@@ -564,6 +582,11 @@ fn animate_command(
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    let seam_rule = if cli.no_seam_fix {
+        nlrt_accel::SeamRule::Open
+    } else {
+        nlrt_accel::SeamRule::Closed
+    };
     let Some(command) = cli.command else {
         eprintln!("nlrt: no command given; running `nlrt report` (see `nlrt --help`)");
         let args = RenderArgs {
@@ -572,7 +595,12 @@ fn main() -> ExitCode {
             bounces: 1,
             scene_size: SceneSize::Small,
         };
-        return report_command(PathBuf::from("nlrt-report"), &args, REPORT_SOLVER_SAMPLES);
+        return report_command(
+            PathBuf::from("nlrt-report"),
+            &args,
+            REPORT_SOLVER_SAMPLES,
+            seam_rule,
+        );
     };
     match command {
         Command::Render {
@@ -583,7 +611,7 @@ fn main() -> ExitCode {
             output,
             aov,
         } => {
-            let built = match resolve_scene(&scene, args.scene_size.into()) {
+            let built = match resolve_scene(&scene, args.scene_size.into(), seam_rule) {
                 Ok(s) => s,
                 Err(e) => return fail("render", e),
             };
@@ -630,6 +658,7 @@ fn main() -> ExitCode {
                 out_dir: None,
                 scaling: false,
                 ray_stream: false,
+                seam_rule,
             };
             let runs = report::run_scene(&built, &opts);
             let run = &runs[0];
@@ -694,6 +723,7 @@ fn main() -> ExitCode {
                 out_dir: None,
                 scaling: true,
                 ray_stream: !no_ray_stream,
+                seam_rule,
             };
             match report::run_with_rows(&opts) {
                 Ok((md, rows)) => {
@@ -714,7 +744,7 @@ fn main() -> ExitCode {
             output,
             args,
             solver_samples,
-        } => report_command(output, &args, solver_samples),
+        } => report_command(output, &args, solver_samples, seam_rule),
         Command::Edit {
             scene_size,
             strokes,
@@ -757,6 +787,7 @@ fn main() -> ExitCode {
             rebuild_frames as usize,
             !no_verify,
             output,
+            seam_rule,
         ),
         Command::Export {
             scene,
@@ -796,21 +827,25 @@ fn main() -> ExitCode {
             } else {
                 let known = SCENE_NAMES.contains(&scene.as_str())
                     || scenes::WATERTIGHT_SCENES.contains(&scene.as_str())
-                    || scenes::GHOST_SCENES.contains(&scene.as_str());
+                    || scenes::GHOST_SCENES.contains(&scene.as_str())
+                    || scenes::SEAM_SCENES.contains(&scene.as_str());
                 match scenes::builtin(&scene, scene_size.into()).filter(|_| known) {
                     Some(s) => s,
                     None => {
                         return fail(
                             "watertight",
                             format!(
-                                "unknown scene '{scene}' (scenes: {}, {}, or a scene file *.toml)",
+                                "unknown scene '{scene}' (scenes: {}, {}, {}, or a scene file *.toml)",
                                 scenes::WATERTIGHT_SCENES.join(", "),
-                                scenes::GHOST_SCENES.join(", ")
+                                scenes::GHOST_SCENES.join(", "),
+                                scenes::SEAM_SCENES.join(", ")
                             ),
                         );
                     }
                 }
             };
+            let mut built = built;
+            built.seam_rule = seam_rule;
             if let Some(k) = frame
                 && k >= frames
             {
@@ -896,7 +931,41 @@ fn main() -> ExitCode {
                     Err(e) => return fail("watertight", format!("{scene}: {e}")),
                 };
             let label = frame.map_or(scene.clone(), |k| format!("{scene} frame {k} of {frames}"));
+            let seams = built.describe_seams();
+            if !seams.is_empty() {
+                eprintln!("{scene}: {}", seams.trim_start_matches(", "));
+            }
+            let mut where_leaked = Vec::new();
             for r in reports {
+                if !r.leak_edges.is_empty() {
+                    // At most this many places listed per method: enough to find them again.
+                    const LISTED: usize = 8;
+                    let places: Vec<String> = r
+                        .leak_edges
+                        .iter()
+                        .take(LISTED)
+                        .map(|e| {
+                            format!(
+                                "triangle {} edge {}{}: {}",
+                                e.triangle,
+                                e.edge,
+                                if e.seam { " (seam)" } else { "" },
+                                e.leaks
+                            )
+                        })
+                        .collect();
+                    let more = r.leak_edges.len().saturating_sub(LISTED);
+                    where_leaked.push(format!(
+                        "{}: leaks by base triangle and nearest edge: {}{}",
+                        r.method,
+                        places.join(", "),
+                        if more > 0 {
+                            format!(", and {more} more")
+                        } else {
+                            String::new()
+                        }
+                    ));
+                }
                 let (lo, hi) = r.wilson_95();
                 println!(
                     "| {label} | {} | {} | {} | {} | {:.2e} | [{:.1e}, {:.1e}] | {} | {} | {:.1} |",
@@ -927,6 +996,9 @@ fn main() -> ExitCode {
                         );
                     }
                 }
+            }
+            for line in where_leaked {
+                println!("{line}");
             }
             ExitCode::SUCCESS
         }

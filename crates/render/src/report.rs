@@ -126,6 +126,8 @@ pub struct ReportOptions {
     /// replay it into every method: primary rays and all rays on every thread, all rays on
     /// one thread.
     pub ray_stream: bool,
+    /// How the scenes' uv and normal seams are treated (`--no-seam-fix`: left open).
+    pub seam_rule: nlrt_accel::SeamRule,
 }
 
 /// A progress bar over image rows on a terminal (indicatif); nothing when stderr is not one.
@@ -386,16 +388,18 @@ pub fn run_with_rows(opts: &ReportOptions) -> Result<(String, Vec<TableRow>), St
     let mut ran = Vec::new();
     let mut points = Vec::new();
     for name in &opts.scenes {
-        let Some(scene) = scenes::builtin(name, opts.size) else {
+        let Some(mut scene) = scenes::builtin(name, opts.size) else {
             return Err(format!(
                 "unknown scene '{name}' (built-in scenes: {})",
                 scenes::SCENE_NAMES.join(", ")
             ));
         };
+        scene.seam_rule = opts.seam_rule;
         eprintln!(
-            "scene {name}: {} base triangles, {}",
+            "scene {name}: {} base triangles, {}{}",
             scene.triangles.len(),
-            scene.content.describe()
+            scene.content.describe(),
+            scene.describe_seams()
         );
         let (runs, recorded) = run_scene_with_stream(&scene, opts);
         if let Some((method, stream)) = &recorded {

@@ -280,6 +280,7 @@ pub fn load_from(path: &Path, source: &Source<'_>) -> Result<Scene, String> {
             MaterialName::Glossy => Material::GLOSSY,
         },
         motion,
+        seam_rule: nlrt_accel::SeamRule::Closed,
     };
     // Mesh values, height scale and tiling as the tracers will see them in f64 (f32 is
     // checked when an f32 method is asked for).

@@ -4,7 +4,9 @@
 
 use crate::animation::{Deformation, Motion, Pose};
 use crate::material::Material;
-use nlrt_accel::{BaseMesh, DisplacedSurface, HeightField, ShellObject, ShellSurface, Wrap};
+use nlrt_accel::{
+    BaseMesh, DisplacedSurface, HeightField, SeamRule, ShellObject, ShellSurface, Wrap,
+};
 use nlrt_poly::glam::{DVec2, DVec3};
 use rayon::prelude::*;
 use std::f64::consts::TAU;
@@ -36,6 +38,9 @@ pub struct Scene {
     pub material: Material,
     /// How the base mesh moves in `nlrt animate` (every built-in scene has a motion).
     pub motion: Motion,
+    /// How uv and normal seams of the base mesh are treated by displacement methods and the
+    /// pre-tessellated reference ([`SeamRule::Closed`] unless `--no-seam-fix`).
+    pub seam_rule: SeamRule,
 }
 
 /// What fills a scene's shell.
@@ -109,16 +114,22 @@ pub const WATERTIGHT_SCENES: [&str; 5] = [
 /// (their figures are in `docs/watertightness.md`).
 pub const GHOST_SCENES: [&str; 3] = ["torus-spikes", "torus-tilted", "torus-twisted"];
 
+/// The uv-seam scenes ([`seam_cube`], [`seam_sphere`]): base meshes whose atlas is cut, so
+/// the two sides of each seam sample different texels.
+pub const SEAM_SCENES: [&str; 2] = ["seam-cube", "seam-sphere"];
+
 /// Built-in scene variants made for one measurement, not part of the default report's
 /// renders: `mountain-grazing` (the mountain seen at grazing angles), `fig9-displaced` (Fig.
-/// 9's columns with a height map) and the ghost-hit tori ([`ghost_torus`]), for `nlrt
-/// watertight`, and usable everywhere a scene is.
-pub const VARIANT_NAMES: [&str; 5] = [
+/// 9's columns with a height map), the ghost-hit tori ([`ghost_torus`]) and the seam scenes
+/// ([`SEAM_SCENES`]), for `nlrt watertight`, and usable everywhere a scene is.
+pub const VARIANT_NAMES: [&str; 7] = [
     "mountain-grazing",
     "fig9-displaced",
     "torus-spikes",
     "torus-tilted",
     "torus-twisted",
+    "seam-cube",
+    "seam-sphere",
 ];
 
 /// Whether `name` is a built-in scene or variant.
@@ -161,6 +172,8 @@ pub fn builtin(name: &str, size: Size) -> Option<Scene> {
             ghost_torus(name, if big { 256 } else { 64 })
         }
         "cornell" => Some(cornell(if big { 15 } else { 6 })),
+        "seam-cube" => Some(seam_cube(if big { 1024 } else { 256 })),
+        "seam-sphere" => Some(seam_sphere(if big { 1024 } else { 256 })),
         "feathers" => Some(feathers()),
         "highpoly" => Some(highpoly(if big { 270 } else { 32 })),
         _ => None,
@@ -287,6 +300,7 @@ pub fn mountain(side: usize) -> Scene {
         sun: DVec3::new(0.5, 0.7, 0.3).normalize(),
         material: Material::Diffuse,
         motion: Motion::deform(Deformation::Wave),
+        seam_rule: SeamRule::Closed,
     }
 }
 
@@ -353,6 +367,7 @@ pub fn cylinder(side: usize) -> Scene {
         sun: DVec3::new(-0.4, 0.6, 0.7).normalize(),
         material: Material::Diffuse,
         motion: Motion::deform(Deformation::Bend),
+        seam_rule: SeamRule::Closed,
     }
 }
 
@@ -380,6 +395,7 @@ pub fn fur(side: usize) -> Scene {
         sun: DVec3::new(0.3, 0.8, 0.5).normalize(),
         material: Material::Diffuse,
         motion: Motion::deform(Deformation::Breathe),
+        seam_rule: SeamRule::Closed,
     }
 }
 
@@ -419,6 +435,45 @@ impl Scene {
         ))
     }
 
+    /// The seams of a displacement scene's base mesh (`None` for shell mapping, which does
+    /// not close them).
+    #[must_use]
+    pub fn seams(&self) -> Option<nlrt_accel::Seams> {
+        let Content::Displacement(field) = &self.content else {
+            return None;
+        };
+        let mesh = self.try_mesh::<f64>().ok()?;
+        Some(nlrt_accel::Seams::find(
+            &mesh,
+            self.tiling,
+            field.wrap() == Wrap::Repeat,
+        ))
+    }
+
+    /// One line on the seams for progress output: `""` without seams, else their counts and
+    /// whether they are closed.
+    #[must_use]
+    pub fn describe_seams(&self) -> String {
+        match self.seams() {
+            Some(seams) if !seams.edges().is_empty() => format!(
+                ", {} seam edges ({} uv, {} normal{}; {})",
+                seams.edges().len(),
+                seams.uv_seams(),
+                seams.normal_seams(),
+                if seams.unpaired() > 0 {
+                    format!(", {} non-manifold left open", seams.unpaired())
+                } else {
+                    String::new()
+                },
+                match self.seam_rule {
+                    SeamRule::Closed => "closed",
+                    SeamRule::Open => "left open: --no-seam-fix",
+                }
+            ),
+            _ => String::new(),
+        }
+    }
+
     /// The displaced surface of a displacement scene in precision `T` (what nonlinear
     /// tracing and every method on the same prisms build on).
     ///
@@ -432,7 +487,7 @@ impl Scene {
         let mesh = self
             .try_mesh::<T>()
             .map_err(|e| format!("base mesh in {}: {e}", T::NAME))?;
-        DisplacedSurface::new(mesh, field.clone(), scale, tiling).map_err(|e| {
+        DisplacedSurface::with_seam_rule(mesh, field.clone(), scale, tiling, self.seam_rule).map_err(|e| {
             format!(
                 "in {}: {e} (texture coordinates x tiling x map side must stay within 2^22 texels)",
                 T::NAME
@@ -592,6 +647,7 @@ fn shell_torus(
         sun: DVec3::new(0.3, 0.8, 0.5).normalize(),
         material,
         motion: Motion::deform(Deformation::Breathe),
+        seam_rule: SeamRule::Closed,
     }
 }
 
@@ -670,6 +726,7 @@ pub fn cornell(n: usize) -> Scene {
         sun: DVec3::new(0.4, 0.7, 0.6).normalize(),
         material: Material::Diffuse,
         motion: Motion::deform(Deformation::Squash),
+        seam_rule: SeamRule::Closed,
     }
 }
 
@@ -696,6 +753,7 @@ pub fn torus_scene(side: usize) -> Scene {
         sun: DVec3::new(0.3, 0.8, 0.5).normalize(),
         material: Material::Diffuse,
         motion: Motion::deform(Deformation::Breathe),
+        seam_rule: SeamRule::Closed,
     }
 }
 
@@ -860,6 +918,7 @@ pub fn fig9() -> Scene {
         sun: DVec3::new(0.3, 0.8, 0.5).normalize(),
         material: Material::Diffuse,
         motion: Motion::deform(Deformation::Twist),
+        seam_rule: SeamRule::Closed,
     }
 }
 
@@ -984,4 +1043,113 @@ pub fn highpoly(n: usize) -> Scene {
         16.0,
         Material::Diffuse,
     )
+}
+
+/// A non-periodic fBm map (clamped at the border) for the seam scenes: the cells of an atlas
+/// hold unrelated relief, so the heights on the two sides of a seam differ.
+fn atlas_map(side: usize, seed: u64) -> HeightField {
+    HeightField::from_unit_heights(side, &fbm_map(side, 8, 6, seed), Wrap::Clamp)
+        .expect("power-of-two side")
+}
+
+/// A cube as a user's asset has it: 6 faces of 4 x 4 quads, each face its own island of a
+/// 3 x 2 uv atlas (with margins), and normals split at the cube's edges (each face keeps its
+/// own). Every edge of the cube is a uv seam and a normal seam; a clamped fBm map makes the
+/// heights on its two sides differ. Positions are exact binary fractions, so the faces' copies
+/// of an edge's vertices are bit-identical.
+#[must_use]
+pub fn seam_cube(side: usize) -> Scene {
+    const QUADS: usize = 4;
+    // The margin of each atlas island, as a share of its cell.
+    const MARGIN: f64 = 1.0 / 16.0;
+    let faces: [(DVec3, DVec3, DVec3); 6] = [
+        (DVec3::X, DVec3::NEG_Z, DVec3::Y),
+        (DVec3::NEG_X, DVec3::Z, DVec3::Y),
+        (DVec3::Y, DVec3::X, DVec3::NEG_Z),
+        (DVec3::NEG_Y, DVec3::X, DVec3::Z),
+        (DVec3::Z, DVec3::X, DVec3::Y),
+        (DVec3::NEG_Z, DVec3::NEG_X, DVec3::Y),
+    ];
+    let (mut positions, mut normals, mut uvs, mut triangles) =
+        (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    for (f, &(n, u, v)) in faces.iter().enumerate() {
+        let base = positions.len() as u32;
+        let cell = DVec2::new((f % 3) as f64, (f / 3) as f64);
+        for j in 0..=QUADS {
+            for i in 0..=QUADS {
+                let (a, b) = (i as f64 / QUADS as f64, j as f64 / QUADS as f64);
+                positions.push(n + u * (2.0 * a - 1.0) + v * (2.0 * b - 1.0));
+                normals.push(n);
+                let local = DVec2::splat(MARGIN) + DVec2::new(a, b) * (1.0 - 2.0 * MARGIN);
+                uvs.push((cell + local) / DVec2::new(3.0, 2.0));
+            }
+        }
+        let idx = |i: usize, j: usize| base + (j * (QUADS + 1) + i) as u32;
+        for j in 0..QUADS {
+            for i in 0..QUADS {
+                triangles.push([idx(i, j), idx(i + 1, j), idx(i + 1, j + 1)]);
+                triangles.push([idx(i, j), idx(i + 1, j + 1), idx(i, j + 1)]);
+            }
+        }
+    }
+    Scene {
+        name: "seam-cube",
+        positions,
+        normals,
+        uvs,
+        triangles,
+        content: Content::Displacement(atlas_map(side, 71)),
+        height_scale: 0.25,
+        tiling: 1.0,
+        camera: Camera {
+            eye: DVec3::new(2.9, 2.3, 3.4),
+            target: DVec3::new(0.0, 0.1, 0.0),
+            fov_degrees: 45.0,
+        },
+        sun: DVec3::new(0.5, 0.8, 0.3).normalize(),
+        material: Material::Diffuse,
+        motion: Motion::deform(Deformation::Squash),
+        seam_rule: SeamRule::Closed,
+    }
+}
+
+/// A uv-sphere (24 x 12 quads) under a clamped fBm map: the `u = 0 / u = 1` meridian is a uv
+/// seam whose sides sample opposite borders of the map, and the poles are seams too (each
+/// pole triangle has its own pole vertex, at its own `u`). The pole rows' other triangles
+/// have zero world area (no surface). Positions are computed once per ring and at the poles
+/// exactly, so the copies of a seam's vertices are bit-identical.
+#[must_use]
+pub fn seam_sphere(side: usize) -> Scene {
+    let (positions, normals, uvs, triangles) = grid(24, 12, |u, v| {
+        let n = if v == 0.0 {
+            DVec3::NEG_Y
+        } else if v == 1.0 {
+            DVec3::Y
+        } else {
+            let (a, b) = (TAU * u, std::f64::consts::PI * (v - 0.5));
+            DVec3::new(a.cos() * b.cos(), b.sin(), a.sin() * b.cos())
+        };
+        (n, n)
+    });
+    Scene {
+        name: "seam-sphere",
+        positions,
+        normals,
+        uvs,
+        triangles,
+        content: Content::Displacement(atlas_map(side, 73)),
+        height_scale: 0.15,
+        tiling: 1.0,
+        camera: Camera {
+            // Facing the meridian seam (u = 0 lies towards +x), from above the equator so a
+            // pole shows too.
+            eye: DVec3::new(3.0, 1.6, -0.6),
+            target: DVec3::ZERO,
+            fov_degrees: 45.0,
+        },
+        sun: DVec3::new(0.6, 0.7, -0.2).normalize(),
+        material: Material::Diffuse,
+        motion: Motion::deform(Deformation::Breathe),
+        seam_rule: SeamRule::Closed,
+    }
 }

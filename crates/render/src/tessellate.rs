@@ -6,7 +6,10 @@
 //! microtriangles); the report states their distance.
 
 use crate::scenes::{Content, Scene};
-use nlrt_accel::{Aabb, Bvh4, HEIGHT_ONE, SlabRay, ray_triangle};
+use nlrt_accel::{
+    Aabb, Bvh4, EDGE_VERTICES, HEIGHT_ONE, HeightField, SeamRule, Seams, SlabRay, Wrap,
+    ray_triangle,
+};
 use nlrt_poly::glam::{DVec2, DVec3};
 use nlrt_shellmap::Prism;
 use rayon::prelude::*;
@@ -42,6 +45,96 @@ fn clip(poly: &[Uvh], a: DVec2, n: DVec2) -> Vec<Uvh> {
     out
 }
 
+/// The seam walls of a displacement scene as world triangles: per seam edge, the region of
+/// the shared side wall (Eq. 1 over the edge, welded `normals`) between the two sides' height
+/// curves, cut where either side's curve bends (it crosses a texel edge or diagonal) and
+/// where the two cross, each piece a quad of two triangles. Base triangle: the first side's.
+fn seam_walls(
+    scene: &Scene,
+    seams: &Seams,
+    normals: &[DVec3],
+    field: &HeightField,
+) -> Vec<([DVec3; 3], u32)> {
+    let texels = scene.tiling * field.side() as f64;
+    let mut out = Vec::new();
+    for edge in seams.edges() {
+        // Each side's edge ends in texel units, in the first side's order.
+        let ends = |side: usize| {
+            let s = edge.sides[side];
+            let tri = scene.triangles[s.triangle as usize];
+            let [i, j] = EDGE_VERTICES[s.edge as usize].map(|k| tri[k] as usize);
+            let (i, j) = if side == 1 && edge.reversed {
+                (j, i)
+            } else {
+                (i, j)
+            };
+            (i, j, scene.uvs[i] * texels, scene.uvs[j] * texels)
+        };
+        let (i, j, a0, a1) = ends(0);
+        let (_, _, b0, b1) = ends(1);
+        // Breakpoints: where either side's uv segment crosses a grid line or a diagonal.
+        let mut cuts = vec![0.0, 1.0];
+        for (p, q) in [(a0, a1), (b0, b1)] {
+            let mut lines = |from: f64, to: f64| {
+                let (lo, hi) = (from.min(to), from.max(to));
+                if hi > lo {
+                    let mut n = lo.ceil();
+                    while n <= hi {
+                        cuts.push((n - from) / (to - from));
+                        n += 1.0;
+                    }
+                }
+            };
+            lines(p.x, q.x);
+            lines(p.y, q.y);
+            lines(p.x - p.y, q.x - q.y);
+        }
+        cuts.retain(|s| (0.0..=1.0).contains(s));
+        cuts.sort_by(f64::total_cmp);
+        cuts.dedup();
+        let height = |p: DVec2, q: DVec2, s: f64| {
+            let at = p + (q - p) * s;
+            field.height_at(at.x, at.y).0
+        };
+        let (p0, p1) = (scene.positions[i], scene.positions[j]);
+        let (n0, n1) = (
+            normals[i] * scene.height_scale,
+            normals[j] * scene.height_scale,
+        );
+        let world = |s: f64, h: f64| p0 + (p1 - p0) * s + (n0 + (n1 - n0) * s) * h;
+        let base = edge.sides[0].triangle;
+        let mut quad = |s0: f64, s1: f64| {
+            let (ha0, ha1) = (height(a0, a1, s0), height(a0, a1, s1));
+            let (hb0, hb1) = (height(b0, b1, s0), height(b0, b1, s1));
+            let q = [
+                world(s0, ha0),
+                world(s1, ha1),
+                world(s1, hb1),
+                world(s0, hb0),
+            ];
+            for t in [[q[0], q[1], q[2]], [q[0], q[2], q[3]]] {
+                if (t[1] - t[0]).cross(t[2] - t[0]).length_squared() > 0.0 {
+                    out.push((t, base));
+                }
+            }
+        };
+        for w in cuts.windows(2) {
+            let (s0, s1) = (w[0], w[1]);
+            let gap = |s: f64| height(a0, a1, s) - height(b0, b1, s);
+            let (g0, g1) = (gap(s0), gap(s1));
+            if g0 * g1 < 0.0 {
+                // The curves cross inside: two pieces, each a triangle in effect.
+                let sc = s0 + (s1 - s0) * g0 / (g0 - g1);
+                quad(s0, sc);
+                quad(sc, s1);
+            } else {
+                quad(s0, s1);
+            }
+        }
+    }
+    out
+}
+
 impl Tessellated {
     /// Tessellates `scene` (in parallel over texel rows).
     #[must_use]
@@ -64,6 +157,21 @@ impl Tessellated {
             Content::Shell(_) => 1.0,
         };
         let scale = scene.tiling * cells_per_tile;
+        // Seams closed as nonlinear tracing closes them (`nlrt_accel::SeamRule`): welded
+        // displacement directions, and walls between the two sides' heights.
+        let seams = match (&scene.content, scene.seam_rule) {
+            (Content::Displacement(field), SeamRule::Closed) => Some(Seams::find(
+                &scene.mesh::<f64>(),
+                scene.tiling,
+                field.wrap() == Wrap::Repeat,
+            )),
+            _ => None,
+        };
+        let normals = seams.as_ref().map_or_else(
+            || scene.normals.clone(),
+            |s| s.welded_normals::<f64>(&scene.normals),
+        );
+        let normals = &normals;
         // (base triangle, texel row) jobs.
         let mut jobs = Vec::new();
         let mut skipped = 0;
@@ -94,7 +202,7 @@ impl Tessellated {
                 let tri = scene.triangles[b];
                 let (p, n) = (
                     tri.map(|v| scene.positions[v as usize]),
-                    tri.map(|v| scene.normals[v as usize] * scene.height_scale),
+                    tri.map(|v| normals[v as usize] * scene.height_scale),
                 );
                 let orient = det.signum();
                 let edges: [(DVec2, DVec2); 3] = core::array::from_fn(|i| {
@@ -152,6 +260,13 @@ impl Tessellated {
                 out
             })
             .unzip();
+        let (mut triangles, mut base) = (triangles, base);
+        if let (Some(seams), Content::Displacement(field)) = (&seams, &scene.content) {
+            for (t, b) in seam_walls(scene, seams, normals, field) {
+                triangles.push(t);
+                base.push(b);
+            }
+        }
         let boxes: Vec<Aabb<f64>> = triangles
             .par_iter()
             .map(|t| Aabb::of_points(t.iter().copied()))

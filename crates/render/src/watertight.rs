@@ -85,6 +85,55 @@ pub struct LeakReport {
     pub ghosts: Option<GhostCount>,
     /// Seconds.
     pub seconds: f64,
+    /// Where the leaks reach the base: per base triangle and its nearest edge, most first.
+    pub leak_edges: Vec<LeakEdge>,
+}
+
+/// Leaks that reach the base near one edge of one base triangle.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct LeakEdge {
+    /// The base triangle.
+    pub triangle: u32,
+    /// Its edge nearest the crossings ([`nlrt_accel::EDGE_VERTICES`]: 0 `alpha = 0`, 1
+    /// `beta = 0`, 2 `alpha + beta = 1`).
+    pub edge: u8,
+    /// Whether that edge is a seam of the mesh.
+    pub seam: bool,
+    /// Leaks there.
+    pub leaks: usize,
+}
+
+/// The edge of base triangle `tri` nearest the ray's base crossing at `t` (by barycentric
+/// coordinates, in f64), and whether it is a seam.
+fn nearest_edge<T: Real>(
+    surface: &nlrt_accel::DisplacedSurface<T>,
+    ray: &Ray<T>,
+    t: f64,
+    tri: usize,
+) -> (u8, bool) {
+    let prism = surface.prism(tri);
+    let [p0, p1, p2] = prism.p.map(|p| DVec3::from(to_f64::<T>(p)));
+    let point = DVec3::from(to_f64::<T>(ray.origin)) + DVec3::from(to_f64::<T>(ray.dir)) * t;
+    let (e1, e2, d) = (p1 - p0, p2 - p0, point - p0);
+    let normal = e1.cross(e2);
+    let area = normal.length_squared();
+    let (alpha, beta) = if area > 0.0 {
+        (
+            d.cross(e2).dot(normal) / area,
+            e1.cross(d).dot(normal) / area,
+        )
+    } else {
+        (0.0, 0.0)
+    };
+    let distances = [alpha, beta, 1.0 - alpha - beta];
+    let edge = (0..3)
+        .min_by(|&a, &b| distances[a].total_cmp(&distances[b]))
+        .unwrap_or(0);
+    let seam = surface
+        .seams()
+        .of_triangle(tri)
+        .is_some_and(|walls| walls[edge] != nlrt_accel::NO_SEAM);
+    (edge as u8, seam)
 }
 
 /// Relative error of hit distances against the oracle: for a sample of the rays that hit, the
@@ -96,7 +145,8 @@ pub struct DistanceError {
     /// Hits compared.
     pub samples: usize,
     /// Hits for which the oracle found no surface in that neighbourhood (the true hit lies in
-    /// another prism, or there is none); left out of the percentiles.
+    /// another prism, or there is none), and seam-wall hits (no microtriangle's; judged as
+    /// ghosts or not instead); left out of the percentiles.
     pub unverified: usize,
     /// Median of `|t - t_true| / t_true`.
     pub median: f64,
@@ -167,8 +217,8 @@ enum Criterion {
     TopCapFirst,
     /// No verdict: the triangle has zero world area, so no surface (rays do not cross it).
     NoSurface,
-    /// No verdict: the triangle's piece of surface has a seam (an edge whose two triangles
-    /// disagree on uvs or normals there), so the surface itself has a crack a ray may pass.
+    /// No verdict: the triangle's piece of surface has a non-manifold seam (an edge of more
+    /// than two triangles that disagree on uvs or normals there), which no rule closes.
     Seam,
 }
 
@@ -237,9 +287,12 @@ fn criteria(scene: &Scene) -> Vec<Criterion> {
         }
         i
     }
+    // An edge shared by exactly two triangles joins them even where they disagree (a seam):
+    // the surface is closed there by the seam rule (`nlrt_accel::SeamRule::Closed`), and with
+    // the rule off, the cracks are what the criterion measures.
     for users in edges.values() {
         for w in users.windows(2) {
-            if agree(&w[0].2, &w[1].2) {
+            if users.len() == 2 || agree(&w[0].2, &w[1].2) {
                 let (a, b) = (root(&mut parent, w[0].0), root(&mut parent, w[1].0));
                 parent[a] = b;
             }
@@ -269,7 +322,7 @@ fn criteria(scene: &Scene) -> Vec<Criterion> {
     };
     let mut piece = vec![Criterion::Base; scene.triangles.len()];
     for users in edges.values() {
-        let seam = users.windows(2).any(|w| !agree(&w[0].2, &w[1].2));
+        let seam = users.len() > 2 && users.windows(2).any(|w| !agree(&w[0].2, &w[1].2));
         for &(tri, k, _) in users {
             let r = root(&mut parent, tri);
             if seam {
@@ -616,8 +669,10 @@ fn measure_in<T: Real>(
                 Some(h) if h.0.to_f64() <= t_base * (1.0 + LEAK_TOLERANCE) => Verdict::Hit,
                 _ => {
                     if std::env::var_os("NLRT_SHOW_LEAKS").is_some() {
+                        let (edge, seam) = nearest_edge(surface, &ray, t_base, base_triangle);
                         eprintln!(
-                            "{method} leak at pixel ({x}, {y}): base triangle {base_triangle} crossed at t = {t_base}, tracer {:?}",
+                            "{method} leak at pixel ({x}, {y}): base triangle {base_triangle} crossed at t = {t_base} nearest its edge {edge}{}, tracer {:?}",
+                            if seam { " (a seam)" } else { "" },
                             hit.map(|h| (h.0.to_f64(), h.1, h.2, h.3, h.4.to_f64()))
                         );
                     }
@@ -630,6 +685,28 @@ fn measure_in<T: Real>(
             .iter()
             .filter(|v| **v != Verdict::NotDecided)
             .count();
+        let mut leak_edges: Vec<LeakEdge> = Vec::new();
+        for (k, v) in verdicts.iter().enumerate() {
+            let (Verdict::Leak(triangle), Some((t_base, _)), Some(ray)) =
+                (v, decisions[k], grid_ray::<T>(scene, n, k))
+            else {
+                continue;
+            };
+            let (edge, seam) = nearest_edge(surface, &ray, t_base, *triangle as usize);
+            match leak_edges
+                .iter_mut()
+                .find(|e| e.triangle == *triangle && e.edge == edge)
+            {
+                Some(e) => e.leaks += 1,
+                None => leak_edges.push(LeakEdge {
+                    triangle: *triangle,
+                    edge,
+                    seam,
+                    leaks: 1,
+                }),
+            }
+        }
+        leak_edges.sort_by(|a, b| b.leaks.cmp(&a.leaks).then(a.triangle.cmp(&b.triangle)));
         let leaks = verdicts
             .iter()
             .filter(|v| matches!(v, Verdict::Leak(_)))
@@ -643,6 +720,7 @@ fn measure_in<T: Real>(
             .as_ref()
             .map(|(t, hits)| ghost_count(hits, t, n, judged_hits));
         reports.push(LeakReport {
+            leak_edges,
             method,
             distance_error,
             ghosts,
@@ -786,6 +864,16 @@ impl<'a, T: Real> TrueSurface<'a, T> {
     fn judge(&self, ray: &Ray<T>, hit: &nlrt_accel::SurfaceHit<T>) -> HitJudgement {
         let (triangle, texel, t) = (hit.triangle as usize, hit.texel, hit.hit.t.to_f64());
         let t_min = t * (1.0 - LEAK_TOLERANCE);
+        if let nlrt_accel::TexelPart::Wall { edge } = hit.part {
+            // A seam wall is no microtriangle: its hit is confirmed when the reported point is
+            // on the wall and on the ray, and no true microtriangle hit around is nearer.
+            return match self.hit_around(ray, triangle, texel, 0.0) {
+                Some(truth) if truth < t_min => HitJudgement::TooFar,
+                _ if self.on_wall(ray, hit, usize::from(edge)) => HitJudgement::Confirmed,
+                _ if self.on_surface(ray, hit) => HitJudgement::Grazing,
+                _ => HitJudgement::Ghost,
+            };
+        }
         let close = |truth: Option<f64>| truth.is_some_and(|x| x <= t * (1.0 + LEAK_TOLERANCE));
         if close(self.texel_hit(ray, triangle, texel, t_min))
             || close(self.hit_around(ray, triangle, texel, t_min))
@@ -797,6 +885,39 @@ impl<'a, T: Real> TrueSurface<'a, T> {
             _ if self.on_surface(ray, hit) => HitJudgement::Grazing,
             _ => HitJudgement::Ghost,
         }
+    }
+
+    /// Whether a seam-wall hit lies on its wall, within [`LEAK_TOLERANCE`]: its canonical
+    /// point on base edge `edge`, its height between the two sides' surface heights at its
+    /// edge parameter, and its shell point (Eq. 1) on the ray within the tolerance times the
+    /// distance. Evaluated in f64 on the tracer's values (as [`TrueSurface::on_surface`]).
+    fn on_wall(&self, ray: &Ray<T>, hit: &nlrt_accel::SurfaceHit<T>, edge: usize) -> bool {
+        let tol = LEAK_TOLERANCE;
+        let prism = self.surface.prism(hit.triangle as usize);
+        let (a, b, h) = (
+            hit.hit.alpha.to_f64(),
+            hit.hit.beta.to_f64(),
+            hit.hit.h.to_f64(),
+        );
+        let across = [a, b, 1.0 - a - b][edge];
+        if across.abs() > tol {
+            return false;
+        }
+        let s = nlrt_accel::edge_parameter(edge, a, b);
+        let Some([h_a, h_b]) = self.surface.seam_heights(hit.triangle as usize, edge, s) else {
+            return false;
+        };
+        if !(h >= h_a.min(h_b) - tol && h <= h_a.max(h_b) + tol) {
+            return false;
+        }
+        let v3 = |v: T::Vec3| DVec3::from(to_f64::<T>(v));
+        let weights = [1.0 - a - b, a, b];
+        let point: DVec3 = (0..3)
+            .map(|k| (v3(prism.p[k]) + v3(prism.n[k]) * h) * weights[k])
+            .sum();
+        let t = hit.hit.t.to_f64();
+        let on_ray = v3(ray.origin) + v3(ray.dir) * t;
+        (point - on_ray).length() <= tol * t * v3(ray.dir).length()
     }
 
     /// Whether the point the tracer reports lies on the true surface, within
@@ -934,12 +1055,16 @@ fn ghost_count<T: Real>(
             let verdict = truth.judge(&ray, &hit);
             if verdict != HitJudgement::Confirmed && std::env::var_os("NLRT_SHOW_LEAKS").is_some() {
                 eprintln!(
-                    "{} {verdict:?} at grid cell ({}, {}): t = {t}, triangle {}, texel {:?}, true hit near it {:?}",
+                    "{} {verdict:?} at grid cell ({}, {}): t = {t}, triangle {}, texel {:?} ({:?}, alpha {}, beta {}, h {}), true hit near it {:?}",
                     T::NAME,
                     k % n,
                     k / n,
                     hit.triangle,
                     hit.texel,
+                    hit.part,
+                    hit.hit.alpha,
+                    hit.hit.beta,
+                    hit.hit.h,
                     truth.hit_around(&ray, hit.triangle as usize, hit.texel, 0.0)
                 );
             }
@@ -976,6 +1101,11 @@ fn distance_error<T: Real>(
         .par_iter()
         .step_by(stride)
         .map(|(_, ray, hit)| {
+            // A seam-wall hit is no microtriangle's: the ghost judgement checks it
+            // (`TrueSurface::on_wall`); here it counts as unverified.
+            if matches!(hit.part, nlrt_accel::TexelPart::Wall { .. }) {
+                return None;
+            }
             let t = hit.hit.t.to_f64();
             truth
                 .hit_around(ray, hit.triangle as usize, hit.texel, 0.0)
@@ -1077,10 +1207,12 @@ mod tests {
         let all = |name: &str| criteria(&builtin(name, Size::Small).unwrap());
         // Closed (the u = 0 / u = 1 wrap of a repeating map is not a seam).
         assert!(all("torus").iter().all(|c| *c == Criterion::Base));
+        // Closed across its seams: every edge of the cube is one.
+        assert!(all("seam-cube").iter().all(|c| *c == Criterion::Base));
         // Open, with heights on the boundary.
         assert!(all("mountain").iter().all(|c| *c == Criterion::TopCapFirst));
         let fig9 = all("fig9-displaced");
-        use Criterion::{Base, NoSurface, Seam, TopCapFirst};
+        use Criterion::{Base, NoSurface, TopCapFirst};
         assert_eq!(
             fig9,
             [
@@ -1088,8 +1220,8 @@ mod tests {
                 Base, // regular: boundary on the zero border
                 TopCapFirst,
                 TopCapFirst, // a triangle's uvs on the diagonal: interior heights
-                Seam,
-                Seam, // point-degenerate uvs on separate vertices
+                TopCapFirst,
+                TopCapFirst, // a seam to point-degenerate uvs: joined, open where they are
                 Base,
                 Base, // pinched to a line
                 Base,
