@@ -80,6 +80,16 @@ enum MaterialName {
     Glossy,
 }
 
+/// How the height map continues past its border: `repeat` (tiled, the default) or `clamp`
+/// (edge samples extended: a map that is not periodic, as a uv atlas's).
+#[derive(Deserialize, Default, Clone, Copy)]
+#[serde(rename_all = "lowercase")]
+enum WrapName {
+    #[default]
+    Repeat,
+    Clamp,
+}
+
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct DisplacementSection {
@@ -87,6 +97,8 @@ struct DisplacementSection {
     height_scale: f64,
     #[serde(default = "one")]
     tiling: f64,
+    #[serde(default)]
+    wrap: WrapName,
 }
 
 #[derive(Deserialize)]
@@ -186,7 +198,12 @@ pub fn load_from(path: &Path, source: &Source<'_>) -> Result<Scene, String> {
                 d.tiling,
                 d.tiling.is_finite() && d.tiling > 0.0 && d.tiling <= 1e6,
             )?;
-            let field = load_height_map(&dir.join(&d.height_map), source)?;
+            let mut field = load_height_map(&dir.join(&d.height_map), source)?;
+            if let WrapName::Clamp = d.wrap {
+                // The samples were valid under one wrap, so they are under the other.
+                field = HeightField::new(field.side(), field.samples().to_vec(), Wrap::Clamp)
+                    .map_err(|e| format!("{}: {e}", path.display()))?;
+            }
             (Content::Displacement(field), d.height_scale, d.tiling)
         }
         (None, Some(s)) => {
@@ -640,8 +657,14 @@ pub fn export(scene: &Scene, dir: &Path) -> Result<PathBuf, String> {
                 .and_then(|mut w| w.write_image_data(&bytes))
                 .map_err(|e| format!("{}: {e}", path.display()))?;
             format!(
-                "[displacement]\nheight_map = \"{name}-height.png\"\nheight_scale = {}\ntiling = {}\n",
-                scene.height_scale, scene.tiling
+                "[displacement]\nheight_map = \"{name}-height.png\"\nheight_scale = {}\ntiling = {}\n{}",
+                scene.height_scale,
+                scene.tiling,
+                if field.wrap() == Wrap::Clamp {
+                    "wrap = \"clamp\"\n"
+                } else {
+                    ""
+                }
             )
         }
         Content::Shell(object) => {

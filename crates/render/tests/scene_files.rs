@@ -175,9 +175,21 @@ fn exported_builtin_scenes_render_like_the_originals() {
         spp: 1,
         bounces: 0,
     };
-    for name in ["fur", "scales", "cornell", "feathers", "highpoly"] {
+    let seam_edges =
+        |scene: &scenes::Scene| scene.seams().map(|s| (s.uv_seams(), s.normal_seams()));
+    for name in [
+        "fur",
+        "scales",
+        "cornell",
+        "feathers",
+        "highpoly",
+        "seam-cube",
+        "seam-sphere",
+    ] {
         let original = scenes::builtin(name, Size::Small).unwrap();
         let loaded = load(&export(&original, &dir).unwrap()).unwrap();
+        // The seams survive the round trip (a clamped map stays clamped: `wrap = "clamp"`).
+        assert_eq!(seam_edges(&loaded), seam_edges(&original), "{name}");
         let a = render(&original, &Nonlinear::<f64>::new(&original), &opts, &|_| {});
         let b = render(&loaded, &Nonlinear::<f64>::new(&loaded), &opts, &|_| {});
         let e = compare(&b, &a);
