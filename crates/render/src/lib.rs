@@ -18,7 +18,7 @@
 //!
 //! Around them: the built-in scenes ([`scenes`]) and scene files ([`scene_file`]), the
 //! speed-against-error report ([`report`], plots in [`plot`]), watertightness against the
-//! MPFR oracle ([`watertight`]), height-map edits ([`edit`]), animated base meshes
+//! MPFR oracle ([`watertight`]), what the seam rule closes ([`seam_view`]), height-map edits ([`edit`]), animated base meshes
 //! ([`animation`], [`animate`]), the solver report
 //! ([`solvers`]) and image output ([`image`]).
 
@@ -41,6 +41,7 @@ pub mod report;
 pub mod resample;
 pub mod scene_file;
 pub mod scenes;
+pub mod seam_view;
 pub mod solvers;
 pub mod tessellate;
 pub mod tracer;

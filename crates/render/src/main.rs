@@ -483,6 +483,11 @@ fn report_command(
             }
         }
     }
+    eprintln!("uv seams...");
+    let seam_md = match seam_section(&output, args) {
+        Ok(md) => md,
+        Err(e) => return fail("report", e),
+    };
     eprintln!("editing...");
     let edit_md = match edit::run(&edit::EditOptions {
         size: args.scene_size.into(),
@@ -504,7 +509,7 @@ fn report_command(
          evenly spaced hits of nonlinear tracing, those in front of the true surface (MPFR \
          oracle on the microtriangles around the hit), and hits too far (`nlrt watertight`; \
          leak images `<scene>-leaks-<method>.png`: grey hit, red leak, yellow ghost, black \
-         undecided).\n\n{leaks_md}\n## Editing (`nlrt edit`)\n\n{edit_md}\n## Cubic solvers\n\n{solver_md}",
+         undecided).\n\n{leaks_md}\n{seam_md}\n## Editing (`nlrt edit`)\n\n{edit_md}\n## Cubic solvers\n\n{solver_md}",
         start.elapsed().as_secs_f64()
     );
     let path = output.join("report.md");
@@ -514,6 +519,29 @@ fn report_command(
     print!("{md}");
     eprintln!("report written to {}", path.display());
     ExitCode::SUCCESS
+}
+
+/// The report's seam section: `seam-cube` rendered by nonlinear tracing in f32 with and
+/// without the seam rule, side by side (`seam-cube-seams.png`), crack pixels in red.
+fn seam_section(output: &std::path::Path, args: &RenderArgs) -> Result<String, String> {
+    let Some(scene) = scenes::builtin("seam-cube", args.scene_size.into()) else {
+        return Err("no seam-cube scene".into());
+    };
+    let opts = args.options();
+    let view = nlrt_render::seam_view::compare(&scene, &opts)?;
+    let path = output.join("seam-cube-seams.png");
+    nlrt_render::image::write_png(&path, 2 * view.width, view.height, &view.rgb)
+        .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+    Ok(format!(
+        "## uv and normal seams\n\n`seam-cube` (every cube edge a uv and a normal seam{}), \
+         nonlinear f32, with the seam rule (left: welded displacement directions and seam \
+         walls) and without it (right, `--no-seam-fix`), crack pixels in red: {} of {} pixels \
+         that hit the surface see through a crack without the rule \
+         (`seam-cube-seams.png`).\n\n![seams](seam-cube-seams.png)\n",
+        scene.describe_seams(),
+        view.crack_pixels,
+        view.hit_pixels
+    ))
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -660,6 +688,10 @@ fn main() -> ExitCode {
                 ray_stream: false,
                 seam_rule,
             };
+            let seams = built.describe_seams();
+            if !seams.is_empty() {
+                eprintln!("{scene}: {}", seams.trim_start_matches(", "));
+            }
             let runs = report::run_scene(&built, &opts);
             let run = &runs[0];
             if let Err(e) = nlrt_render::image::write_png(

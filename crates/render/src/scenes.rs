@@ -102,12 +102,13 @@ pub const SCENE_NAMES: [&str; 9] = [
 
 /// Scenes whose rays `nlrt watertight` can decide (displacement scenes: closed meshes, or the
 /// mountain's convex shell) and the report measures.
-pub const WATERTIGHT_SCENES: [&str; 5] = [
+pub const WATERTIGHT_SCENES: [&str; 6] = [
     "torus",
     "fur",
     "mountain",
     "mountain-grazing",
     "fig9-displaced",
+    "seam-cube",
 ];
 
 /// The ghost-hit tori ([`ghost_torus`]): judged by `nlrt watertight`, not by the report
