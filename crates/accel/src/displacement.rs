@@ -90,6 +90,8 @@ pub struct DisplacedSurface<T: Real> {
     pub(crate) texel_size: T,
     seams: Seams,
     seam_rule: SeamRule,
+    /// `seam_rule` is [`SeamRule::Closed`] and the mesh has seams: walls are tested.
+    has_walls: bool,
 }
 
 impl<T: Real> DisplacedSurface<T> {
@@ -172,6 +174,7 @@ impl<T: Real> DisplacedSurface<T> {
             prisms,
             field,
             texel_size: T::ONE / T::from_f64(side),
+            has_walls: rule == SeamRule::Closed && !seams.edges().is_empty(),
             seams,
             seam_rule: rule,
         })
@@ -727,7 +730,7 @@ impl<T: Real> DisplacedSurface<T> {
 
     /// `hit`, or a nearer hit on a seam wall of triangle `tri` (only with
     /// [`SeamRule::Closed`] on a mesh with seams: elsewhere this is one length test).
-    #[inline]
+    #[inline(always)]
     fn nearer_wall_hit(
         &self,
         tri: usize,
@@ -737,12 +740,30 @@ impl<T: Real> DisplacedSurface<T> {
         t_max: T,
         hit: Option<SurfaceHit<T>>,
     ) -> Option<SurfaceHit<T>> {
-        if self.seam_rule == SeamRule::Open {
+        if !self.has_walls {
             return hit;
         }
+        self.nearer_wall_hit_of_seams(tri, prism, ray, t_min, t_max, hit)
+    }
+
+    /// [`DisplacedSurface::nearer_wall_hit`] on a mesh with seams closed by walls; kept out
+    /// of line so that the common case, no seams, costs the hot loop one test of a flag.
+    #[inline(never)]
+    fn nearer_wall_hit_of_seams(
+        &self,
+        tri: usize,
+        prism: &Prism<T>,
+        ray: &NonlinearRay<T>,
+        t_min: T,
+        t_max: T,
+        hit: Option<SurfaceHit<T>>,
+    ) -> Option<SurfaceHit<T>> {
         let Some(walls) = self.seams.of_triangle(tri) else {
             return hit;
         };
+        if walls.iter().all(|&w| w == NO_SEAM) {
+            return hit;
+        }
         let t_max = hit.map_or(t_max, |h| h.hit.t);
         self.wall_hit(tri, walls, prism, ray, t_min, t_max).or(hit)
     }
@@ -772,14 +793,12 @@ impl<T: Real> DisplacedSurface<T> {
         // moved out of it is still found; `wall_covers` decides.
         let reach = T::from_f64(1.0 / 1024.0);
         for (k, &seam) in walls.iter().enumerate() {
-            if seam == NO_SEAM {
+            // `may_cross` is false only where no solve could find a root (its bound exceeds
+            // the solver's): the same crossings, without a solve for most prisms.
+            if seam == NO_SEAM || !edges.may_cross(k, -reach, T::ONE + reach) {
                 continue;
             }
             for &h in solve_quadratic_in(edges.edges[k], -reach, T::ONE + reach).iter() {
-                let w = edges.window(k, h).min(T::ONE);
-                if !self.wall_covers(tri, k, seam as usize, ray, h.to_f64(), w.to_f64()) {
-                    continue;
-                }
                 let abh = WALL_PLANES[k].map(T::from_i32);
                 let Some((alpha, beta)) = alpha_beta_eq11(ray, &abh, h) else {
                     continue;
@@ -792,7 +811,12 @@ impl<T: Real> DisplacedSurface<T> {
                     _ => (T::ONE - s, s),
                 };
                 let t = ray.signed_distance(prism, alpha, beta, h);
+                // Cheap tests first: most crossings lie behind a hit already found.
                 if !(t >= t_min && t <= t_max) {
+                    continue;
+                }
+                let w = edges.window(k, h).min(T::ONE);
+                if !self.wall_covers(tri, k, seam as usize, ray, h.to_f64(), w.to_f64()) {
                     continue;
                 }
                 t_max = t;

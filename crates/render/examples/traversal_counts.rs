@@ -6,7 +6,7 @@
 //! `cargo run --release --example traversal_counts -p nlrt-render -- fur paper f32 160`
 //!
 //! Arguments: scene, `small` or `paper` map sizes, `f32` or `f64`, pixels per row (rows:
-//! 3/4 of it). Instruction counts of the trace alone, which do not depend on the load of a
+//! 3/4 of it), and optionally `open` (seams left open, as `--no-seam-fix`). Instruction counts of the trace alone, which do not depend on the load of a
 //! shared machine: `valgrind --tool=callgrind --toggle-collect='*trace_all*'` on the built
 //! example.
 
@@ -95,9 +95,14 @@ fn main() {
         Some(Ok(w)) if (4..=4096).contains(&w) => w,
         Some(_) => fail("pixels per row: a number from 4 to 4096"),
     };
-    let Some(scene) = builtin(name, size) else {
+    let Some(mut scene) = builtin(name, size) else {
         fail(&format!("unknown scene {name}"));
     };
+    match args.get(5).map(String::as_str) {
+        None => {}
+        Some("open") => scene.seam_rule = nlrt_accel::SeamRule::Open,
+        Some(other) => fail(&format!("unknown option {other} (open)")),
+    }
     match args.get(3).map(String::as_str) {
         None | Some("f32") => run::<f32>(name, &scene, w),
         Some("f64") => run::<f64>(name, &scene, w),
