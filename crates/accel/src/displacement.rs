@@ -882,7 +882,7 @@ impl<T: Real> DisplacedSurface<T> {
         let (s_lo, s_hi) = (s_lo.max(0.0), s_hi.min(1.0));
         let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
         let mut slope = [0.0f64; 2];
-        for x in [s_lo, s.max(0.0).min(1.0), s_hi] {
+        for x in [s_lo, s.clamp(0.0, 1.0), s_hi] {
             let Some(sides) = self.seam_heights_of(tri, k, seam, x) else {
                 return false;
             };

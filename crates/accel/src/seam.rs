@@ -92,6 +92,9 @@ pub struct Seams {
 /// Bit pattern of a position, exact for f32 and f64 (`to_f64` is exact).
 type PositionKey = [u64; 3];
 
+/// The triangles using an edge: (triangle, its edge, the edge's vertices, low key first).
+type EdgeUsers = Vec<(u32, u8, [u32; 2])>;
+
 fn position_key<T: Real>(p: T::Vec3) -> PositionKey {
     [p.x(), p.y(), p.z()].map(|c| c.to_f64().to_bits())
 }
@@ -142,8 +145,7 @@ impl Seams {
     pub fn find<T: Real>(mesh: &BaseMesh<T>, tiling: f64, repeats: bool) -> Self {
         let (positions, normals, uvs) = (mesh.positions(), mesh.normals(), mesh.uvs());
         // Per edge (by positions, low key first): (triangle, edge, its vertices low-first).
-        let mut shared: BTreeMap<(PositionKey, PositionKey), Vec<(u32, u8, [u32; 2])>> =
-            BTreeMap::new();
+        let mut shared: BTreeMap<(PositionKey, PositionKey), EdgeUsers> = BTreeMap::new();
         for t in 0..mesh.triangle_count() {
             let tri = mesh.triangle(t);
             if has_no_area::<T>(tri.map(|v| positions[v as usize])) {
