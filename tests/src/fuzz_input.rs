@@ -314,6 +314,168 @@ pub fn fuzz_displacement<T: Real>(data: &[u8]) {
     }
 }
 
+/// Values a [`fuzz_seam`] input holds after its header and map: four positions (12), the
+/// normals (18) and uvs (12) of the two triangles' own vertex copies, and a ray (6).
+pub const SEAM_VALUES: usize = 48;
+
+/// The surfaces of a [`fuzz_seam`] input: the two triangles `(p0, p1, p2)` and `(p0, p2, p3)`
+/// on their own vertices (so the diagonal is a seam wherever their uvs or normals differ
+/// there), closed by the seam rule and left open, and the ray; `None` where set-up rejects
+/// the input.
+#[must_use]
+pub fn seam_case<T: Real>(
+    data: &[u8],
+) -> Option<(
+    nlrt_accel::DisplacedSurface<T>,
+    nlrt_accel::DisplacedSurface<T>,
+    nlrt_shellmap::Ray<T>,
+)> {
+    use nlrt_accel::{BaseMesh, DisplacedSurface, HeightField, SeamRule, Wrap};
+    use nlrt_poly::{Vector2, Vector3};
+    let header = data.first().copied().unwrap_or(0);
+    let side = 2usize << (header & 3);
+    let wrap = if header & 4 == 0 {
+        Wrap::Repeat
+    } else {
+        Wrap::Clamp
+    };
+    let tiling = T::from_i32(i32::from((header >> 3) & 3) + 1);
+    let sample_bytes = data.get(1..).unwrap_or(&[]);
+    let samples = (0..side * side)
+        .map(|i| {
+            let b = |k: usize| u16::from(sample_bytes.get(2 * i + k).copied().unwrap_or(0));
+            b(0) | (b(1) << 8)
+        })
+        .collect();
+    let field = HeightField::new(side, samples, wrap).expect("valid side");
+    let rest = data.get(1 + 2 * side * side..).unwrap_or(&[]);
+    let x = decode::<T, SEAM_VALUES>(rest).coeffs;
+    let v3 = |i: usize| T::Vec3::new(x[i], x[i + 1], x[i + 2]);
+    let p = [v3(0), v3(3), v3(6), v3(9)];
+    let normals = (0..6).map(|k| v3(12 + 3 * k)).collect();
+    let uvs = (0..6)
+        .map(|k| T::Vec2::new(x[30 + 2 * k], x[31 + 2 * k]))
+        .collect();
+    let mesh = BaseMesh::new(
+        vec![p[0], p[1], p[2], p[0], p[2], p[3]],
+        normals,
+        uvs,
+        vec![[0, 1, 2], [3, 4, 5]],
+    )
+    .ok()?;
+    let ray = nlrt_shellmap::Ray::new(v3(42), v3(45))?;
+    let closed = DisplacedSurface::new(mesh.clone(), field.clone(), T::ONE, tiling).ok()?;
+    let open =
+        DisplacedSurface::with_seam_rule(mesh, field, T::ONE, tiling, SeamRule::Open).ok()?;
+    Some((closed, open, ray))
+}
+
+/// The seam target: a small map, two triangles that share an edge's positions with any uvs
+/// and normals on their own vertices, and a ray, from raw bytes. No panic under either seam
+/// rule; every hit (seam walls included) finite, ahead, with `h` in `[0, 1]` and `(alpha,
+/// beta)` in its base triangle; a seam wall only on a seam edge; and the accelerated hit never
+/// nearer than testing every texel and wall, checked when the texel ranges are small.
+pub fn fuzz_seam<T: Real>(data: &[u8]) {
+    use nlrt_accel::{NO_SEAM, TexelPart, TraversalStats};
+    let Some((closed, open, ray)) = seam_case::<T>(data) else {
+        return;
+    };
+    assert!(
+        closed.seams().edges().len() <= 1,
+        "two triangles share one edge at most"
+    );
+    for surface in [&closed, &open] {
+        let fast = surface.intersect(&ray, T::ZERO, T::INFINITY, &mut TraversalStats::default());
+        let Some(hit) = fast else {
+            continue;
+        };
+        check_traversal_hit(&hit.hit, &hit);
+        if let TexelPart::Wall { edge } = hit.part {
+            let walls = surface.seams().of_triangle(hit.triangle as usize);
+            assert!(
+                walls.is_some_and(|w| w[usize::from(edge)] != NO_SEAM),
+                "a wall hit off a seam {hit:?}"
+            );
+            let _ = surface.normal(&hit, ray.dir);
+        }
+        let small = (0..2).all(|t| {
+            let [x0, y0, x1, y1] = surface.roots(t).texels.map(i64::from);
+            (x1 - x0 + 1) * (y1 - y0 + 1) <= BRUTE_FORCE_CELLS
+        });
+        if small {
+            let brute = surface.intersect_brute_force(&ray, T::ZERO, T::INFINITY);
+            let b = brute.expect("brute force tests every texel and wall the traversal tests");
+            assert!(
+                hit.hit.t >= b.hit.t,
+                "accelerated {hit:?} nearer than brute force {b:?}"
+            );
+        }
+    }
+}
+
+/// A structured [`fuzz_seam`] input from `seed` (deterministic): a unit square whose two
+/// triangles' copies of the diagonal's ends get other uvs and tilted normals (each at random,
+/// so some inputs have a uv seam, some a normal seam, some both or none), a random map, and a
+/// ray from above at a random angle, grazing ones included. For the seed corpus and for the
+/// property test that runs many of them.
+#[must_use]
+pub fn seam_seed<T: Real>(seed: u64) -> Vec<u8> {
+    let mut state = seed
+        .wrapping_mul(0x9e37_79b9_7f4a_7c15)
+        .wrapping_add(0x2545_f491_4f6c_dd1d);
+    let mut next = move || {
+        state = state.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut z = state;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        z ^ (z >> 31)
+    };
+    let mut unit = || (next() >> 11) as f64 / (1u64 << 53) as f64;
+    let header = (unit() * 256.0) as u8;
+    let side = 2usize << (header & 3);
+    let mut bytes = vec![header];
+    for _ in 0..2 * side * side {
+        bytes.push((unit() * 256.0) as u8);
+    }
+    let mut values: Vec<f64> = Vec::with_capacity(SEAM_VALUES);
+    let corners = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
+    for c in corners {
+        values.extend([c[0], c[1], 0.2 * unit() - 0.1]);
+    }
+    let tilt = |u: &mut dyn FnMut() -> f64| [0.8 * u() - 0.4, 0.8 * u() - 0.4, 1.0];
+    let (same_normals, same_uvs) = (unit() < 0.3, unit() < 0.3);
+    let normal_a: Vec<[f64; 3]> = (0..3).map(|_| tilt(&mut unit)).collect();
+    let normal_b: Vec<[f64; 3]> = (0..3).map(|_| tilt(&mut unit)).collect();
+    // Copies: triangle A = (p0, p1, p2), B = (p0, p2, p3).
+    let normals_b = if same_normals {
+        [normal_a[0], normal_a[2], normal_b[2]]
+    } else {
+        [normal_b[0], normal_b[1], normal_b[2]]
+    };
+    for n in normal_a.iter().chain(normals_b.iter()) {
+        values.extend(n);
+    }
+    let scale = 0.2 + 0.8 * unit();
+    let shift_a = [unit(), unit()];
+    let shift_b = if same_uvs { shift_a } else { [unit(), unit()] };
+    for (k, c) in [0, 1, 2, 0, 2, 3].into_iter().enumerate() {
+        let shift = if k < 3 { shift_a } else { shift_b };
+        values.extend([
+            corners[c][0] * scale + shift[0],
+            corners[c][1] * scale + shift[1],
+        ]);
+    }
+    let origin = [2.0 * unit() - 0.5, 2.0 * unit() - 0.5, 0.05 + 1.5 * unit()];
+    let target = [unit(), unit(), 0.3 * unit()];
+    values.extend(origin);
+    values.extend((0..3).map(|i| target[i] - origin[i]));
+    let width = (T::BITS / 8) as usize;
+    for v in values {
+        bytes.extend_from_slice(&T::from_f64(v).to_bits_u64().to_le_bytes()[..width]);
+    }
+    bytes
+}
+
 /// The shell traversal target: up to four object triangles in the unit tile (raw values;
 /// out-of-tile objects must be rejected cleanly), tiling 1 to 8, one base triangle and a
 /// ray. Same properties as [`fuzz_displacement`].

@@ -485,7 +485,14 @@ impl<T: Real> DisplacedSurface<T> {
             let (alpha, beta) = (alpha.max(T::ZERO), beta.max(T::ZERO));
             let sum = alpha + beta;
             let (alpha, beta) = if sum > T::ONE {
-                (alpha / sum, beta / sum)
+                // The quotients may still sum to 1 + 1 ulp; `1 - alpha` then makes the sum
+                // round to at most 1 (it is within half an ulp of `beta` of 1).
+                let (alpha, beta) = (alpha / sum, beta / sum);
+                if alpha + beta > T::ONE {
+                    (alpha, T::ONE - alpha)
+                } else {
+                    (alpha, beta)
+                }
             } else {
                 (alpha, beta)
             };
