@@ -62,6 +62,7 @@ fn curved_scenes_agree_with_the_reference_on_most_pixels() {
     for scene in [
         scenes::cylinder(64),
         scenes::fur(32),
+        scenes::fur_hair(32),
         scenes::scales(),
         scenes::feathers(),
         scenes::highpoly(16),
