@@ -224,9 +224,9 @@ enum Command {
     /// tracing: hits in front of the true surface, judged by the MPFR oracle.
     Watertight {
         /// Displacement scene: torus, fur, mountain, mountain-grazing, fig9-displaced, the
-        /// ghost-hit tori torus-spikes, torus-tilted, torus-twisted (or cylinder, whose open
-        /// ends make only part of its rays decidable), or a scene file (`*.toml`) with a
-        /// height map.
+        /// ghost-hit tori torus-spikes, torus-tilted, torus-twisted, the uv-seam scenes
+        /// seam-cube, seam-sphere (or cylinder, whose open ends make only part of its rays
+        /// decidable), or a scene file (`*.toml`) with a height map.
         scene: String,
         /// Rays: a square grid of camera rays with at least this many.
         #[arg(long, default_value_t = 65_536, value_parser = clap::value_parser!(u64).range(1..=100_000_000))]
@@ -362,6 +362,23 @@ fn builtin_list() -> String {
         SCENE_NAMES.join(", "),
         scenes::VARIANT_NAMES.join(", ")
     )
+}
+
+/// The built-in displacement scenes `nlrt watertight` is meant for, each once: the judged
+/// ones, the ghost-hit tori, the seam scenes, the thin-hair fur and the cylinder.
+fn judged_scene_names() -> Vec<&'static str> {
+    let mut names: Vec<&'static str> = Vec::new();
+    for name in scenes::WATERTIGHT_SCENES
+        .iter()
+        .chain(scenes::GHOST_SCENES.iter())
+        .chain(scenes::SEAM_SCENES.iter())
+        .chain(["fur-hair", "cylinder"].iter())
+    {
+        if !names.contains(name) {
+            names.push(name);
+        }
+    }
+    names
 }
 
 /// Help for a scene argument: `what` (built-in scenes listed) or a scene file.
@@ -857,20 +874,15 @@ fn main() -> ExitCode {
                     Err(e) => return fail("watertight", e),
                 }
             } else {
-                let known = SCENE_NAMES.contains(&scene.as_str())
-                    || scenes::WATERTIGHT_SCENES.contains(&scene.as_str())
-                    || scenes::GHOST_SCENES.contains(&scene.as_str())
-                    || scenes::SEAM_SCENES.contains(&scene.as_str());
+                let known = scenes::is_builtin(&scene);
                 match scenes::builtin(&scene, scene_size.into()).filter(|_| known) {
                     Some(s) => s,
                     None => {
                         return fail(
                             "watertight",
                             format!(
-                                "unknown scene '{scene}' (scenes: {}, {}, {}, or a scene file *.toml)",
-                                scenes::WATERTIGHT_SCENES.join(", "),
-                                scenes::GHOST_SCENES.join(", "),
-                                scenes::SEAM_SCENES.join(", ")
+                                "unknown scene '{scene}' (scenes: {}, or a scene file *.toml)",
+                                judged_scene_names().join(", ")
                             ),
                         );
                     }
