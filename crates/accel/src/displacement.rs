@@ -554,6 +554,23 @@ impl<T: Real> DisplacedSurface<T> {
             }
             return best;
         }
+        // The base is a floor under the surface (heights are >= 0): a ray that leaves the shell
+        // through the base inside this texel, descending, has met the surface by then. Where it
+        // meets it at the base itself (a texel with a corner at 0, the ray through its zero
+        // edge or corner), the cubic's value there is 0 up to the rounding of its
+        // coefficients, which the piece search cannot see (no sign change): report the floor
+        // point. It is never nearer than the true hit, so it adds no ghost; where the search
+        // finds a hit, that one is nearer and wins.
+        let floor_hit = |b: T, t_max: T| -> Option<Hit<T>> {
+            let (alpha, beta) = ray.alpha_beta(T::ZERO)?;
+            let t_top = curve.distance(b)?;
+            let t = ray.signed_distance(prism, alpha, beta, T::ZERO);
+            // Descending (the base is reached after the piece's top), inside the triangle.
+            let inside = alpha >= T::ZERO && beta >= T::ZERO && alpha + beta <= T::ONE;
+            (t > t_top && inside && t >= t_min && t <= t_max)
+                .then(|| Hit::at(prism, t, alpha, beta, T::ZERO))
+        };
+        let mut floor: Option<(Hit<T>, TexelPart)> = None;
         let mut previous: Option<bool> = None; // location of the piece before the split point
         for i in 0..splits.len() {
             let (a, edge) = splits[i];
@@ -592,6 +609,12 @@ impl<T: Real> DisplacedSurface<T> {
             if let Some(lower) = here {
                 let (b, edge_b) = splits[i + 1];
                 let (cubic, abh, part) = side(lower);
+                if a == T::ZERO
+                    && let Some(hit) = floor_hit(b, t_max)
+                {
+                    t_max = hit.t;
+                    floor = Some((hit, part));
+                }
                 // Where the piece ends on a base-triangle edge, the neighbouring prism computes
                 // the same crossing with its own rounding: extend the piece by a bound on this
                 // crossing's error so the two prisms' pieces overlap (no gap to slip through);
@@ -612,7 +635,11 @@ impl<T: Real> DisplacedSurface<T> {
             }
             previous = here;
         }
-        best
+        match (best, floor) {
+            (Some(b), Some(f)) if f.0.t < b.0.t => Some(f),
+            (None, f) => f,
+            (b, _) => b,
+        }
     }
 
     /// The nearest hit of `ray` on the displaced surface of triangle `tri` through the

@@ -349,6 +349,32 @@ fn seams_are_closed_by_the_rule_and_leak_without_it() {
     }
 }
 
+/// A ray of `fur-hair` (pixel (948.5, 657.5) of `watertight`'s 1000 x 1000 grid) that, in
+/// f32, descends onto a texel edge whose two corners are at height 0 and reaches it exactly at
+/// the base: the surface touches the base there, and the cubic's value at the piece's end is 0
+/// up to the rounding of its coefficients, so no sign change shows. It must hit at the base
+/// crossing (the oracle's base distance 2.35694066), not pass on to the torus's far side
+/// (t = 3.2056, the leak this test was written for).
+#[test]
+fn a_ray_touching_the_base_at_a_zero_texel_edge_hits_there() {
+    use nlrt_accel::TraversalStats;
+    use nlrt_poly::glam::Vec3;
+    let scene = scenes::builtin("fur-hair", scenes::Size::Small).unwrap();
+    let surface = scene.displaced_surface::<f32>().unwrap();
+    let d = scene.camera.direction(948.5 / 1000.0, 657.5 / 1000.0, 1.0);
+    let v = |a: nlrt_poly::glam::DVec3| Vec3::new(a.x as f32, a.y as f32, a.z as f32);
+    let ray = nlrt_shellmap::Ray::<f32>::new(v(scene.camera.eye), v(d)).unwrap();
+    let hit = surface
+        .intersect(&ray, 0.0, f32::INFINITY, &mut TraversalStats::default())
+        .expect("the ray meets the surface");
+    let t_base = 2.356_940_664_401_393_7;
+    assert!(
+        (f64::from(hit.hit.t) - t_base).abs() < nlrt_render::watertight::LEAK_TOLERANCE * t_base,
+        "{hit:?}"
+    );
+    assert_eq!(hit.triangle, 1168, "{hit:?}");
+}
+
 #[test]
 fn fig9_displaced_columns_nonlinear_is_watertight_tessellation_free_leaks_where_uvs_degenerate() {
     // Fig. 9's degenerate columns, displaced, 65,536 rays. Triangles: column c has 2c and
