@@ -226,12 +226,11 @@ fn check_traversal_hit<T: Real>(h: &nlrt_shellmap::Hit<T>, context: &dyn core::f
 /// Texel (or tile) ranges up to this many cells are also tested by brute force.
 const BRUTE_FORCE_CELLS: i64 = 4096;
 
-/// The surface and ray of a [`fuzz_displacement`] input, or `None` where set-up rejects it.
-#[must_use]
-pub fn displacement_case<T: Real>(
-    data: &[u8],
-) -> Option<(nlrt_accel::DisplacedSurface<T>, nlrt_shellmap::Ray<T>)> {
-    use nlrt_accel::{DisplacedSurface, HeightField, Wrap};
+/// The height map that leads a traversal input: a header byte (side 2 to 16, wrap mode,
+/// tiling 1 to 4), then the samples as little-endian 16-bit values (missing bytes read as 0);
+/// with the bytes after them.
+fn map_of<T: Real>(data: &[u8]) -> (nlrt_accel::HeightField, T, &[u8]) {
+    use nlrt_accel::{HeightField, Wrap};
     let header = data.first().copied().unwrap_or(0);
     let side = 2usize << (header & 3);
     let wrap = if header & 4 == 0 {
@@ -248,7 +247,20 @@ pub fn displacement_case<T: Real>(
         })
         .collect();
     let field = HeightField::new(side, samples, wrap).expect("valid side");
-    let rest = data.get(1 + 2 * side * side..).unwrap_or(&[]);
+    (
+        field,
+        tiling,
+        data.get(1 + 2 * side * side..).unwrap_or(&[]),
+    )
+}
+
+/// The surface and ray of a [`fuzz_displacement`] input, or `None` where set-up rejects it.
+#[must_use]
+pub fn displacement_case<T: Real>(
+    data: &[u8],
+) -> Option<(nlrt_accel::DisplacedSurface<T>, nlrt_shellmap::Ray<T>)> {
+    use nlrt_accel::DisplacedSurface;
+    let (field, tiling, rest) = map_of::<T>(data);
     let x = decode::<T, 30>(rest).coeffs;
     let (mesh, ray) = base_and_ray(&x)?;
     let surface = DisplacedSurface::new(mesh, field, T::ONE, tiling).ok()?;
@@ -330,25 +342,9 @@ pub fn seam_case<T: Real>(
     nlrt_accel::DisplacedSurface<T>,
     nlrt_shellmap::Ray<T>,
 )> {
-    use nlrt_accel::{BaseMesh, DisplacedSurface, HeightField, SeamRule, Wrap};
+    use nlrt_accel::{BaseMesh, DisplacedSurface, SeamRule};
     use nlrt_poly::{Vector2, Vector3};
-    let header = data.first().copied().unwrap_or(0);
-    let side = 2usize << (header & 3);
-    let wrap = if header & 4 == 0 {
-        Wrap::Repeat
-    } else {
-        Wrap::Clamp
-    };
-    let tiling = T::from_i32(i32::from((header >> 3) & 3) + 1);
-    let sample_bytes = data.get(1..).unwrap_or(&[]);
-    let samples = (0..side * side)
-        .map(|i| {
-            let b = |k: usize| u16::from(sample_bytes.get(2 * i + k).copied().unwrap_or(0));
-            b(0) | (b(1) << 8)
-        })
-        .collect();
-    let field = HeightField::new(side, samples, wrap).expect("valid side");
-    let rest = data.get(1 + 2 * side * side..).unwrap_or(&[]);
+    let (field, tiling, rest) = map_of::<T>(data);
     let x = decode::<T, SEAM_VALUES>(rest).coeffs;
     let v3 = |i: usize| T::Vec3::new(x[i], x[i + 1], x[i + 2]);
     let p = [v3(0), v3(3), v3(6), v3(9)];

@@ -1034,6 +1034,18 @@ mod tests {
     use alloc::vec::Vec;
     use nlrt_poly::glam::{DVec2, DVec3};
 
+    /// `side^2` heights in `[0, 1)` from a linear congruential generator seeded by `state`.
+    fn random_heights(side: usize, mut state: u64) -> Vec<f32> {
+        (0..side * side)
+            .map(|_| {
+                state = state
+                    .wrapping_mul(6_364_136_223_846_793_005)
+                    .wrapping_add(1_442_695_040_888_963_407);
+                (state >> 40) as f32 / (1u64 << 24) as f32
+            })
+            .collect()
+    }
+
     /// A mesh of two unit squares: the first (x in [0, 1]) split along its diagonal by a uv
     /// seam (its halves take their uvs from different places of a clamped random map) and a
     /// normal seam (the halves' copies of the diagonal's ends tilt differently); the second (x
@@ -1071,15 +1083,7 @@ mod tests {
         triangles.push([b, b + 2, b + 3]);
         let mesh = BaseMesh::new(positions, normals, uvs, triangles).unwrap();
         let side = 16;
-        let mut state = 0x2545_f491_4f6c_dd1d_u64;
-        let heights: Vec<f32> = (0..side * side)
-            .map(|_| {
-                state = state
-                    .wrapping_mul(6_364_136_223_846_793_005)
-                    .wrapping_add(1_442_695_040_888_963_407);
-                (state >> 40) as f32 / (1u64 << 24) as f32
-            })
-            .collect();
+        let heights = random_heights(side, 0x2545_f491_4f6c_dd1d_u64);
         let field = HeightField::from_unit_heights(side, &heights, Wrap::Clamp).unwrap();
         (mesh, field)
     }
@@ -1170,15 +1174,7 @@ mod tests {
         )
         .unwrap();
         let side = 32;
-        let mut state = 0x9e37_79b9_7f4a_7c15_u64;
-        let heights: Vec<f32> = (0..side * side)
-            .map(|_| {
-                state = state
-                    .wrapping_mul(6_364_136_223_846_793_005)
-                    .wrapping_add(1_442_695_040_888_963_407);
-                (state >> 40) as f32 / (1u64 << 24) as f32
-            })
-            .collect();
+        let heights = random_heights(side, 0x9e37_79b9_7f4a_7c15_u64);
         let field = HeightField::from_unit_heights(side, &heights, Wrap::Repeat).unwrap();
         let surface = DisplacedSurface::new(mesh, field, 0.2, 1.0).unwrap();
         let (mut fallbacks, mut hits) = (0, 0);

@@ -910,14 +910,7 @@ impl<'a, T: Real> TrueSurface<'a, T> {
         if !(h >= h_a.min(h_b) - tol && h <= h_a.max(h_b) + tol) {
             return false;
         }
-        let v3 = |v: T::Vec3| DVec3::from(to_f64::<T>(v));
-        let weights = [1.0 - a - b, a, b];
-        let point: DVec3 = (0..3)
-            .map(|k| (v3(prism.p[k]) + v3(prism.n[k]) * h) * weights[k])
-            .sum();
-        let t = hit.hit.t.to_f64();
-        let on_ray = v3(ray.origin) + v3(ray.dir) * t;
-        (point - on_ray).length() <= tol * t * v3(ray.dir).length()
+        shell_point_on_ray(&prism, ray, a, b, h, hit.hit.t.to_f64())
     }
 
     /// Whether the point the tracer reports lies on the true surface, within
@@ -938,13 +931,7 @@ impl<'a, T: Real> TrueSurface<'a, T> {
         if weights.iter().any(|&w| w < -tol) || !(-tol..=1.0 + tol).contains(&h) {
             return false;
         }
-        let v3 = |v: T::Vec3| DVec3::from(to_f64::<T>(v));
-        let point: DVec3 = (0..3)
-            .map(|k| (v3(prism.p[k]) + v3(prism.n[k]) * h) * weights[k])
-            .sum();
-        let t = hit.hit.t.to_f64();
-        let on_ray = v3(ray.origin) + v3(ray.dir) * t;
-        if (point - on_ray).length() > tol * t * v3(ray.dir).length() {
+        if !shell_point_on_ray(&prism, ray, a, b, h, hit.hit.t.to_f64()) {
             return false;
         }
         let field = self.surface.field();
@@ -956,22 +943,28 @@ impl<'a, T: Real> TrueSurface<'a, T> {
                 v + uv.y().to_f64() * weights[k],
             )
         });
-        let (x, y) = (u * side, v * side);
-        let (tx, ty) = (x.floor(), y.floor());
-        let (fx, fy) = (x - tx, y - ty);
-        let unit = f64::from(nlrt_accel::HEIGHT_ONE);
-        let c = field
-            .texel_corners(tx as i64, ty as i64)
-            .map(|s| f64::from(s) / unit);
-        // The texel's two microtriangles share the diagonal from its (0, 0) to its (1, 1)
-        // corner (corners in the order (0, 0), (1, 0), (0, 1), (1, 1)).
-        let surface_height = if fx >= fy {
-            c[0] + fx * (c[1] - c[0]) + fy * (c[3] - c[1])
-        } else {
-            c[0] + fy * (c[2] - c[0]) + fx * (c[3] - c[2])
-        };
+        let (surface_height, _) = field.height_at(u * side, v * side);
         (h - surface_height).abs() <= tol
     }
+}
+
+/// Whether the shell point `(alpha, beta, h)` of `prism` (Eq. 1, in f64 on the tracer's
+/// values) lies on `ray` at distance `t`, within [`LEAK_TOLERANCE`] times the distance.
+fn shell_point_on_ray<T: Real>(
+    prism: &nlrt_shellmap::Prism<T>,
+    ray: &Ray<T>,
+    alpha: f64,
+    beta: f64,
+    h: f64,
+    t: f64,
+) -> bool {
+    let v3 = |v: T::Vec3| DVec3::from(to_f64::<T>(v));
+    let weights = [1.0 - alpha - beta, alpha, beta];
+    let point: DVec3 = (0..3)
+        .map(|k| (v3(prism.p[k]) + v3(prism.n[k]) * h) * weights[k])
+        .sum();
+    let on_ray = v3(ray.origin) + v3(ray.dir) * t;
+    (point - on_ray).length() <= LEAK_TOLERANCE * t * v3(ray.dir).length()
 }
 
 /// The oracle's verdict on one hit.
