@@ -157,7 +157,7 @@ impl<T: Real> DisplacedSurface<T> {
         let repeats = field.wrap() == crate::Wrap::Repeat;
         let seams = Seams::find(&mesh, tiling.to_f64(), repeats);
         let mut mesh = mesh;
-        if rule == SeamRule::Closed {
+        if rule == SeamRule::Closed && seams.welds_something() {
             let welded = seams.welded_normals::<T>(mesh.normals());
             if welded.as_slice() != mesh.normals() {
                 let positions = mesh.positions().to_vec();
@@ -249,6 +249,7 @@ impl<T: Real> DisplacedSurface<T> {
     ) -> Result<PoseUpdate, MeshError> {
         let vertices = self.mesh().positions().len();
         if self.seam_rule == SeamRule::Closed
+            && self.seams.welds_something()
             && positions.len() == vertices
             && normals.len() == vertices
         {
@@ -855,11 +856,8 @@ impl<T: Real> DisplacedSurface<T> {
                 }
                 t_max = t;
                 let hit = Hit::at(prism, t, alpha, beta, h);
-                let texel = [hit.u, hit.v].map(|c| {
-                    let x = (c / self.texel_size).to_f64();
-                    let x = x as i64 as f64 - f64::from(u8::from(x < (x as i64) as f64));
-                    x as i32
-                });
+                let texel = [hit.u, hit.v]
+                    .map(|c| crate::tlas::texel_floor((c / self.texel_size).to_f64()));
                 best = Some(SurfaceHit {
                     hit,
                     triangle: tri as u32,

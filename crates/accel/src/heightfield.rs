@@ -203,13 +203,10 @@ impl HeightField {
     /// ```
     #[must_use]
     pub fn height_at(&self, x: f64, y: f64) -> (f64, f64) {
-        // floor without std or libm, exact for the texel coordinates a mesh may have (below
-        // MAX_TEXEL_COORDINATE, far within i64).
-        let floor = |v: f64| {
-            let t = v as i64 as f64;
-            if t > v { t - 1.0 } else { t }
-        };
-        let (tx, ty) = (floor(x), floor(y));
+        let (tx, ty) = (
+            f64::from(crate::tlas::texel_floor(x)),
+            f64::from(crate::tlas::texel_floor(y)),
+        );
         let (fx, fy) = (x - tx, y - ty);
         let unit = f64::from(HEIGHT_ONE);
         let c = self

@@ -284,6 +284,13 @@ impl Seams {
         self.unpaired
     }
 
+    /// Whether some vertices have normals to weld (a normal seam, or normals that differ at a
+    /// uv seam's shared ends); otherwise [`Seams::welded_normals`] returns its input.
+    #[must_use]
+    pub fn welds_something(&self) -> bool {
+        !self.weld_groups.is_empty()
+    }
+
     /// `normals` with each weld group's vertices given one direction: the normalised sum of
     /// the group's distinct normals times their mean length. A group whose normals cancel
     /// (the sum below `1e-9` of their total length: no direction is common to them) keeps

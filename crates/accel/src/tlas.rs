@@ -32,13 +32,19 @@ pub struct RootNodes {
     pub texels: [i32; 4],
 }
 
+/// `floor(x)` of a texel coordinate without std or libm; exact for `|x| <`
+/// [`MAX_TEXEL_COORDINATE`] (far within `i32`), saturating beyond it.
+#[must_use]
+#[inline]
+pub(crate) fn texel_floor(x: f64) -> i32 {
+    let t = x as i32;
+    if f64::from(t) > x { t - 1 } else { t }
+}
+
 /// The smallest level at which texels `floor(lo)..=floor(hi)` span at most 2 nodes per axis.
 pub(crate) fn root_nodes(lo: [f64; 2], hi: [f64; 2]) -> RootNodes {
-    // floor for |x| < MAX_TEXEL_COORDINATE (checked by the caller), without std or libm.
-    let floor = |x: f64| {
-        let t = x as i32;
-        if f64::from(t) > x { t - 1 } else { t }
-    };
+    // |x| < MAX_TEXEL_COORDINATE is checked by the caller.
+    let floor = texel_floor;
     let t0 = [floor(lo[0]), floor(lo[1])];
     let t1 = [floor(hi[0]), floor(hi[1])];
     let mut level = 0;
