@@ -226,7 +226,7 @@ impl<T: Real> Cubic<T> {
 
 /// `6 u`: the noise factor of a cubic's Horner evaluation (see [`Cubic::magnitude`]).
 #[inline(always)]
-fn noise_factor<T: Real>() -> T {
+pub(crate) fn noise_factor<T: Real>() -> T {
     T::from_i32(6) * T::UNIT_ROUNDOFF
 }
 
@@ -549,7 +549,7 @@ fn max_iterations<T: Real>() -> u32 {
 /// Newton steps tried from a guess before falling back to the safeguarded iteration. From the
 /// trigonometric guesses two suffice in f64 and one in f32; a third absorbs a guess near a
 /// double root or a root much closer to 0 than the guess.
-const FAST_STEPS: u32 = 3;
+pub(crate) const FAST_STEPS: u32 = 3;
 
 /// Whether the Newton step `step` from `x` (slope `df`) lands on the root to within half an
 /// ulp. Quadratic convergence puts the error after the step near `|p''| step^2 / (2 |p'|)`,
@@ -579,7 +579,7 @@ fn converged<T: Real>(p: &Cubic<T>, x: T, step: T, df: T) -> bool {
 /// reaches f32 precision and two reach f64 precision. Taking them unconditionally lets the three
 /// lanes of [`three_roots_fast`] run as straight-line (vectorizable) code.
 #[inline(always)]
-fn fixed_steps<T: Real>() -> u32 {
+pub(crate) fn fixed_steps<T: Real>() -> u32 {
     if T::MANTISSA_DIGITS > 24 { 2 } else { 1 }
 }
 

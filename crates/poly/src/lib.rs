@@ -38,13 +38,16 @@ compile_error!("nlrt-poly needs the `std` or the `libm` feature for sqrt, cbrt a
 extern crate std;
 
 pub mod baseline;
+mod batch;
 mod cubic;
 mod eval;
+mod lanes;
 mod quadratic;
 mod real;
 mod roots;
 mod vector;
 
+pub use batch::{CUBIC_BATCH, first_cubic_root_batch_in, solve_cubic_batch_in, solve_cubics_in};
 pub use cubic::{first_cubic_root_in, solve_cubic, solve_cubic_in};
 pub use eval::{decided_sign, horner, horner_with_bound, horner_with_bound_scaled};
 pub use glam;

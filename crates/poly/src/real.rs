@@ -59,6 +59,10 @@ pub trait Real:
     type Mat3: Copy + Debug + PartialEq + Send + Sync + 'static;
     /// The unsigned integer of the same width, for bit manipulation.
     type Bits: Copy + Debug + Eq + Ord;
+    /// Eight values side by side for the batch solvers (an AVX register for `f32` where the
+    /// build has AVX2 and FMA). An implementation detail of [`crate::solve_cubic_batch_in`].
+    #[doc(hidden)]
+    type Batch: crate::lanes::Lanes<Self>;
 
     /// 0
     const ZERO: Self;
@@ -274,7 +278,7 @@ pub trait Real:
 /// Implements [`Real`] for one float type; `$f` names the libm functions of that type.
 macro_rules! impl_real {
     (
-        $t:ident, $bits:ty, $vec2:ty, $vec3:ty, $mat3:ty,
+        $t:ident, $bits:ty, $vec2:ty, $vec3:ty, $mat3:ty, batch: $batch:ty,
         sqrt: $sqrt:ident, cbrt: $cbrt:ident, fma: $fma:ident, acos: $acos:ident, cos: $cos:ident,
         hw_fma: $hw_fma:ident, set: $set:ident, get: $get:ident
     ) => {
@@ -283,6 +287,7 @@ macro_rules! impl_real {
             type Vec3 = $vec3;
             type Mat3 = $mat3;
             type Bits = $bits;
+            type Batch = $batch;
 
             const ZERO: Self = 0.0;
             const ONE: Self = 1.0;
@@ -427,10 +432,10 @@ macro_rules! impl_real {
     };
 }
 
-impl_real!(f32, u32, glam::Vec2, glam::Vec3, glam::Mat3,
+impl_real!(f32, u32, glam::Vec2, glam::Vec3, glam::Mat3, batch: crate::lanes::F32Lanes,
     sqrt: sqrtf, cbrt: cbrtf, fma: fmaf, acos: acosf, cos: cosf,
     hw_fma: _mm_fmadd_ss, set: _mm_set_ss, get: _mm_cvtss_f32);
-impl_real!(f64, u64, glam::DVec2, glam::DVec3, glam::DMat3,
+impl_real!(f64, u64, glam::DVec2, glam::DVec3, glam::DMat3, batch: crate::lanes::Portable<f64>,
     sqrt: sqrt, cbrt: cbrt, fma: fma, acos: acos, cos: cos,
     hw_fma: _mm_fmadd_sd, set: _mm_set_sd, get: _mm_cvtsd_f64);
 

@@ -1,0 +1,361 @@
+//! Eight values of one [`Real`] type side by side, for the batch solvers: one trait, a portable
+//! implementation (eight scalars, each operation the [`Real`] one) and, where the build has
+//! AVX2 and FMA, one over `__m256`. Every operation is exact or correctly rounded in both, so
+//! a kernel written once over [`Lanes`] gives the same bits through either.
+
+use crate::Real;
+use core::ops::{Add, BitAnd, BitOr, Div, Mul, Neg, Not, Sub};
+
+/// Width of a batch.
+pub const LANES: usize = 8;
+
+/// A lane mask: bit `i` of [`LaneMask::bits`] is lane `i`.
+pub trait LaneMask:
+    Copy + BitAnd<Output = Self> + BitOr<Output = Self> + Not<Output = Self>
+{
+    /// The lanes as bits.
+    fn bits(self) -> u8;
+}
+
+/// Eight lanes of `T` with the operations the batch kernels need (IEEE semantics per lane).
+pub trait Lanes<T: Real>:
+    Copy
+    + Add<Output = Self>
+    + Sub<Output = Self>
+    + Mul<Output = Self>
+    + Div<Output = Self>
+    + Neg<Output = Self>
+{
+    /// The comparison result.
+    type Mask: LaneMask;
+    /// Every lane `v`.
+    fn splat(v: T) -> Self;
+    /// Lane `i` from `v[i]`.
+    fn from_array(v: [T; LANES]) -> Self;
+    /// Lane `i` into element `i`.
+    fn to_array(self) -> [T; LANES];
+    /// `self * a + b`, one rounding.
+    fn mul_add(self, a: Self, b: Self) -> Self;
+    /// `|self|`
+    fn abs(self) -> Self;
+    /// Correctly rounded square root.
+    fn sqrt(self) -> Self;
+    /// `|self|` with the sign bit of `sign`.
+    fn copysign(self, sign: Self) -> Self;
+    /// `self < o`, false on NaN.
+    fn lt(self, o: Self) -> Self::Mask;
+    /// `self <= o`, false on NaN.
+    fn le(self, o: Self) -> Self::Mask;
+    /// `self > o`, false on NaN.
+    fn gt(self, o: Self) -> Self::Mask;
+    /// `self >= o`, false on NaN.
+    fn ge(self, o: Self) -> Self::Mask;
+    /// `self == o`, false on NaN.
+    fn eq(self, o: Self) -> Self::Mask;
+    /// `self != o`, true on NaN.
+    fn ne(self, o: Self) -> Self::Mask;
+    /// `a` where `m`, else `b`.
+    fn select(m: Self::Mask, a: Self, b: Self) -> Self;
+
+    /// [`Real::max`] (the non-NaN operand when one is NaN; `self` for equal values, so signed
+    /// zeros are not ordered: the kernels never compare `+0` with `-0`).
+    #[inline(always)]
+    fn max(self, o: Self) -> Self {
+        Self::select(self.ge(o) | o.ne(o), self, o)
+    }
+
+    /// [`Real::min`], with the same conventions as [`Lanes::max`].
+    #[inline(always)]
+    fn min(self, o: Self) -> Self {
+        Self::select(self.le(o) | o.ne(o), self, o)
+    }
+}
+
+/// Eight scalars: the reference implementation of [`Lanes`], and the one used without AVX2.
+#[derive(Clone, Copy, Debug)]
+pub struct Portable<T>([T; LANES]);
+
+/// The mask of [`Portable`].
+#[derive(Clone, Copy, Debug)]
+pub struct PortableMask(u8);
+
+impl BitAnd for PortableMask {
+    type Output = Self;
+    #[inline(always)]
+    fn bitand(self, o: Self) -> Self {
+        Self(self.0 & o.0)
+    }
+}
+impl BitOr for PortableMask {
+    type Output = Self;
+    #[inline(always)]
+    fn bitor(self, o: Self) -> Self {
+        Self(self.0 | o.0)
+    }
+}
+impl Not for PortableMask {
+    type Output = Self;
+    #[inline(always)]
+    fn not(self) -> Self {
+        Self(!self.0)
+    }
+}
+impl LaneMask for PortableMask {
+    #[inline(always)]
+    fn bits(self) -> u8 {
+        self.0
+    }
+}
+
+macro_rules! portable_binary {
+    ($trait:ident, $f:ident, $op:tt) => {
+        impl<T: Real> $trait for Portable<T> {
+            type Output = Self;
+            #[inline(always)]
+            fn $f(self, o: Self) -> Self {
+                Self(core::array::from_fn(|i| self.0[i] $op o.0[i]))
+            }
+        }
+    };
+}
+portable_binary!(Add, add, +);
+portable_binary!(Sub, sub, -);
+portable_binary!(Mul, mul, *);
+portable_binary!(Div, div, /);
+
+impl<T: Real> Neg for Portable<T> {
+    type Output = Self;
+    #[inline(always)]
+    fn neg(self) -> Self {
+        Self(self.0.map(|v| -v))
+    }
+}
+
+impl<T: Real> Portable<T> {
+    #[inline(always)]
+    fn compare(self, o: Self, f: impl Fn(T, T) -> bool) -> PortableMask {
+        let mut bits = 0u8;
+        for i in 0..LANES {
+            bits |= u8::from(f(self.0[i], o.0[i])) << i;
+        }
+        PortableMask(bits)
+    }
+}
+
+impl<T: Real> Lanes<T> for Portable<T> {
+    type Mask = PortableMask;
+    #[inline(always)]
+    fn splat(v: T) -> Self {
+        Self([v; LANES])
+    }
+    #[inline(always)]
+    fn from_array(v: [T; LANES]) -> Self {
+        Self(v)
+    }
+    #[inline(always)]
+    fn to_array(self) -> [T; LANES] {
+        self.0
+    }
+    #[inline(always)]
+    fn mul_add(self, a: Self, b: Self) -> Self {
+        Self(core::array::from_fn(|i| self.0[i].mul_add(a.0[i], b.0[i])))
+    }
+    #[inline(always)]
+    fn abs(self) -> Self {
+        Self(self.0.map(T::abs))
+    }
+    #[inline(always)]
+    fn sqrt(self) -> Self {
+        Self(self.0.map(T::sqrt))
+    }
+    #[inline(always)]
+    fn copysign(self, sign: Self) -> Self {
+        Self(core::array::from_fn(|i| self.0[i].copysign(sign.0[i])))
+    }
+    #[inline(always)]
+    fn lt(self, o: Self) -> PortableMask {
+        self.compare(o, |a, b| a < b)
+    }
+    #[inline(always)]
+    fn le(self, o: Self) -> PortableMask {
+        self.compare(o, |a, b| a <= b)
+    }
+    #[inline(always)]
+    fn gt(self, o: Self) -> PortableMask {
+        self.compare(o, |a, b| a > b)
+    }
+    #[inline(always)]
+    fn ge(self, o: Self) -> PortableMask {
+        self.compare(o, |a, b| a >= b)
+    }
+    #[inline(always)]
+    fn eq(self, o: Self) -> PortableMask {
+        self.compare(o, |a, b| a == b)
+    }
+    #[inline(always)]
+    fn ne(self, o: Self) -> PortableMask {
+        self.compare(o, |a, b| a != b)
+    }
+    #[inline(always)]
+    fn select(m: PortableMask, a: Self, b: Self) -> Self {
+        Self(core::array::from_fn(|i| {
+            if m.0 >> i & 1 == 1 { a.0[i] } else { b.0[i] }
+        }))
+    }
+}
+
+#[cfg(all(
+    target_arch = "x86_64",
+    target_feature = "avx2",
+    target_feature = "fma"
+))]
+pub use avx2::F32x8;
+
+#[cfg(all(
+    target_arch = "x86_64",
+    target_feature = "avx2",
+    target_feature = "fma"
+))]
+mod avx2 {
+    //! `__m256` lanes. SAFETY (every `unsafe` block below): the module is compiled only when
+    //! the build enables `avx2` and `fma` (cfg above), so the intrinsics are available; the
+    //! transmutes are between `[f32; 8]` and `__m256`, which have the same size and no
+    //! invalid bit patterns.
+    use super::{LaneMask, Lanes};
+    use core::arch::x86_64::*;
+    use core::ops::{Add, BitAnd, BitOr, Div, Mul, Neg, Not, Sub};
+
+    /// Eight `f32` lanes in one AVX register.
+    #[derive(Clone, Copy, Debug)]
+    pub struct F32x8(__m256);
+
+    /// All-ones or all-zeros per lane.
+    #[derive(Clone, Copy, Debug)]
+    pub struct Mask8(__m256);
+
+    impl BitAnd for Mask8 {
+        type Output = Self;
+        #[inline(always)]
+        fn bitand(self, o: Self) -> Self {
+            Self(unsafe { _mm256_and_ps(self.0, o.0) })
+        }
+    }
+    impl BitOr for Mask8 {
+        type Output = Self;
+        #[inline(always)]
+        fn bitor(self, o: Self) -> Self {
+            Self(unsafe { _mm256_or_ps(self.0, o.0) })
+        }
+    }
+    impl Not for Mask8 {
+        type Output = Self;
+        #[inline(always)]
+        fn not(self) -> Self {
+            Self(unsafe { _mm256_xor_ps(self.0, _mm256_castsi256_ps(_mm256_set1_epi32(-1))) })
+        }
+    }
+    impl LaneMask for Mask8 {
+        #[inline(always)]
+        fn bits(self) -> u8 {
+            (unsafe { _mm256_movemask_ps(self.0) }) as u8
+        }
+    }
+
+    macro_rules! binary {
+        ($trait:ident, $f:ident, $intrinsic:ident) => {
+            impl $trait for F32x8 {
+                type Output = Self;
+                #[inline(always)]
+                fn $f(self, o: Self) -> Self {
+                    Self(unsafe { $intrinsic(self.0, o.0) })
+                }
+            }
+        };
+    }
+    binary!(Add, add, _mm256_add_ps);
+    binary!(Sub, sub, _mm256_sub_ps);
+    binary!(Mul, mul, _mm256_mul_ps);
+    binary!(Div, div, _mm256_div_ps);
+
+    #[inline(always)]
+    fn sign_bit() -> __m256 {
+        unsafe { _mm256_set1_ps(-0.0) }
+    }
+
+    impl Neg for F32x8 {
+        type Output = Self;
+        #[inline(always)]
+        fn neg(self) -> Self {
+            Self(unsafe { _mm256_xor_ps(self.0, sign_bit()) })
+        }
+    }
+
+    macro_rules! compare {
+        ($f:ident, $predicate:ident) => {
+            #[inline(always)]
+            fn $f(self, o: Self) -> Mask8 {
+                Mask8(unsafe { _mm256_cmp_ps::<$predicate>(self.0, o.0) })
+            }
+        };
+    }
+
+    impl Lanes<f32> for F32x8 {
+        type Mask = Mask8;
+        #[inline(always)]
+        fn splat(v: f32) -> Self {
+            Self(unsafe { _mm256_set1_ps(v) })
+        }
+        #[inline(always)]
+        fn from_array(v: [f32; 8]) -> Self {
+            Self(unsafe { core::mem::transmute::<[f32; 8], __m256>(v) })
+        }
+        #[inline(always)]
+        fn to_array(self) -> [f32; 8] {
+            unsafe { core::mem::transmute::<__m256, [f32; 8]>(self.0) }
+        }
+        #[inline(always)]
+        fn mul_add(self, a: Self, b: Self) -> Self {
+            Self(unsafe { _mm256_fmadd_ps(self.0, a.0, b.0) })
+        }
+        #[inline(always)]
+        fn abs(self) -> Self {
+            Self(unsafe { _mm256_andnot_ps(sign_bit(), self.0) })
+        }
+        #[inline(always)]
+        fn sqrt(self) -> Self {
+            Self(unsafe { _mm256_sqrt_ps(self.0) })
+        }
+        #[inline(always)]
+        fn copysign(self, sign: Self) -> Self {
+            let s = sign_bit();
+            Self(unsafe { _mm256_or_ps(_mm256_andnot_ps(s, self.0), _mm256_and_ps(s, sign.0)) })
+        }
+        compare!(lt, _CMP_LT_OQ);
+        compare!(le, _CMP_LE_OQ);
+        compare!(gt, _CMP_GT_OQ);
+        compare!(ge, _CMP_GE_OQ);
+        compare!(eq, _CMP_EQ_OQ);
+        compare!(ne, _CMP_NEQ_UQ);
+        #[inline(always)]
+        fn select(m: Mask8, a: Self, b: Self) -> Self {
+            Self(unsafe { _mm256_blendv_ps(b.0, a.0, m.0) })
+        }
+    }
+}
+
+/// The lanes [`Real::Batch`] uses for `f32`: one AVX register where the build has AVX2 and
+/// FMA, eight scalars otherwise.
+#[cfg(all(
+    target_arch = "x86_64",
+    target_feature = "avx2",
+    target_feature = "fma"
+))]
+pub type F32Lanes = F32x8;
+/// The lanes [`Real::Batch`] uses for `f32`: one AVX register where the build has AVX2 and
+/// FMA, eight scalars otherwise.
+#[cfg(not(all(
+    target_arch = "x86_64",
+    target_feature = "avx2",
+    target_feature = "fma"
+)))]
+pub type F32Lanes = Portable<f32>;
