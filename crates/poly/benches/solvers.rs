@@ -10,7 +10,10 @@ use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_m
 use nlrt_oracle::families::{RandomFamily, SplitMix64, cubic_from_roots};
 use nlrt_oracle::peers;
 use nlrt_poly::baseline::solve_cubic_closed_form_in;
-use nlrt_poly::{Real, first_cubic_root_in, solve_cubic_in, solve_quadratic};
+use nlrt_poly::{
+    CUBIC_BATCH, Real, Roots, first_cubic_root_batch_in, first_cubic_root_in, solve_cubic_in,
+    solve_cubics_in, solve_quadratic,
+};
 use std::hint::black_box;
 
 const SAMPLES: usize = 100_000;
@@ -120,6 +123,54 @@ fn bench_all_roots<T: Real + roots::FloatType>(
     g.finish();
 }
 
+/// The batch API against the scalar calls on the same cubics, all on `[lo, hi]`: all roots
+/// through `solve_cubics_in`, and the first root eight at a time.
+fn bench_batch<T: Real>(crit: &mut Criterion, group: &str, cubics: &[[T; 4]], lo: T, hi: T) {
+    let mut g = crit.benchmark_group(format!("{group}/{}", T::NAME));
+    g.throughput(Throughput::Elements(cubics.len() as u64));
+    let (los, his) = (vec![lo; cubics.len()], vec![hi; cubics.len()]);
+    let mut out = vec![Roots::none(); cubics.len()];
+    g.bench_function(BenchmarkId::from_parameter("scalar_all"), |b| {
+        b.iter(|| {
+            for (o, &c) in out.iter_mut().zip(cubics) {
+                *o = solve_cubic_in(black_box(c), lo, hi);
+            }
+            out.iter().map(|r| r.len()).sum::<usize>()
+        })
+    });
+    g.bench_function(BenchmarkId::from_parameter("batch_all"), |b| {
+        b.iter(|| {
+            solve_cubics_in(black_box(cubics), &los, &his, &mut out);
+            out.iter().map(|r| r.len()).sum::<usize>()
+        })
+    });
+    g.bench_function(BenchmarkId::from_parameter("scalar_first"), |b| {
+        b.iter(|| {
+            cubics
+                .iter()
+                .filter_map(|&c| first_cubic_root_in(black_box(c), lo, hi))
+                .count()
+        })
+    });
+    g.bench_function(BenchmarkId::from_parameter("batch_first"), |b| {
+        let (l, h) = ([lo; CUBIC_BATCH], [hi; CUBIC_BATCH]);
+        b.iter(|| {
+            cubics
+                .chunks_exact(CUBIC_BATCH)
+                .map(|chunk| {
+                    let c: &[[T; 4]; CUBIC_BATCH] =
+                        chunk.try_into().unwrap_or_else(|_| unreachable!());
+                    first_cubic_root_batch_in(black_box(c), &l, &h)
+                        .iter()
+                        .flatten()
+                        .count()
+                })
+                .sum::<usize>()
+        })
+    });
+    g.finish();
+}
+
 fn bench_type<T: Real + roots::FloatType>(crit: &mut Criterion) {
     let cubics = unit_cubics::<T>();
     let (lo, hi) = (T::ZERO, T::ONE);
@@ -132,6 +183,9 @@ fn bench_type<T: Real + roots::FloatType>(crit: &mut Criterion) {
         T::NEG_INFINITY,
         T::INFINITY,
     );
+
+    bench_batch(crit, "cubic_batch_in_unit", &cubics, lo, hi);
+    bench_batch(crit, "cubic_batch_near_start", &near_start_cubics(), lo, hi);
 
     bench_first_root(crit, "cubic_first_root_in_unit", &cubics, lo, hi);
     // The texel test's case: the nearest root early in the interval, the others later.

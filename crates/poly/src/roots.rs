@@ -15,7 +15,8 @@ use core::ops::Deref;
 /// assert_eq!(roots.len(), 3);
 /// assert!((roots[1] - 2.0).abs() < 1e-15);
 /// ```
-#[derive(Clone, Copy, PartialEq)]
+/// Two root sets are equal when they hold the same roots (`as_slice` equality).
+#[derive(Clone, Copy)]
 pub struct Roots<T: Real> {
     values: [T; 3],
     len: u8,
@@ -51,6 +52,15 @@ impl<T: Real> Roots<T> {
     #[inline(always)]
     pub(crate) fn from_sorted(values: [T; 3]) -> Self {
         Self { values, len: 3 }
+    }
+
+    /// Sets the roots to the first `len` of `values` (already in increasing order); the rest
+    /// is ignored.
+    #[inline(always)]
+    pub(crate) fn set_first(&mut self, values: [T; 3], len: u8) {
+        debug_assert!(len <= 3);
+        self.values = values;
+        self.len = len;
     }
 
     /// Appends a root (the solvers push in increasing order).
@@ -97,6 +107,13 @@ impl<T: Real> Roots<T> {
             }
         }
         out
+    }
+}
+
+impl<T: Real> PartialEq for Roots<T> {
+    #[inline]
+    fn eq(&self, other: &Self) -> bool {
+        self.as_slice() == other.as_slice()
     }
 }
 
