@@ -8,7 +8,8 @@
 //! subnormals, signed zeros.
 
 use nlrt_poly::{
-    Real, first_cubic_root_in, horner_with_bound_scaled, solve_cubic_in, solve_quadratic_in,
+    CUBIC_BATCH, Real, first_cubic_root_batch_in, first_cubic_root_in, horner_with_bound_scaled,
+    solve_cubic_batch_in, solve_cubic_in, solve_quadratic_in,
 };
 
 /// What the decoder made of the bytes.
@@ -136,6 +137,45 @@ pub fn fuzz_cubic<T: Real>(data: &[u8]) {
         roots.first().copied(),
         "first root differs from all roots: {input:?}"
     );
+}
+
+/// Bytes per input of [`fuzz_cubic_batch`]: four coefficients and two interval ends.
+#[must_use]
+pub fn cubic_input_bytes<T: Real>() -> usize {
+    6 * (T::BITS / 8) as usize
+}
+
+/// The batch cubic fuzz target: [`CUBIC_BATCH`] inputs of [`cubic_input_bytes`] each, every
+/// one decoded as [`fuzz_cubic`] decodes its input (missing bytes read as zero, a short input
+/// is solved on the whole line). The batch answers must be the scalar answers bit for bit, and
+/// the scalar answers must pass [`check_answer`].
+pub fn fuzz_cubic_batch<T: Real>(data: &[u8]) {
+    let width = cubic_input_bytes::<T>();
+    let inputs: [Input<T, 4>; CUBIC_BATCH] = core::array::from_fn(|i| {
+        let start = (i * width).min(data.len());
+        let end = ((i + 1) * width).min(data.len());
+        decode::<T, 4>(&data[start..end])
+    });
+    let c = inputs.map(|x| x.coeffs);
+    let (lo, hi) = (inputs.map(|x| x.lo), inputs.map(|x| x.hi));
+    let all = solve_cubic_batch_in(&c, &lo, &hi);
+    let first = first_cubic_root_batch_in(&c, &lo, &hi);
+    let bits = |r: &[T]| r.iter().map(|v| v.to_bits_u64()).collect::<Vec<_>>();
+    for (i, input) in inputs.iter().enumerate() {
+        let scalar = solve_cubic_in(input.coeffs, input.lo, input.hi);
+        assert_eq!(
+            bits(&all[i]),
+            bits(&scalar),
+            "batch lane {i} differs from the scalar solver: {input:?}"
+        );
+        check_answer(input, &scalar);
+        let scalar_first = first_cubic_root_in(input.coeffs, input.lo, input.hi);
+        assert_eq!(
+            bits(first[i].as_slice()),
+            bits(scalar_first.as_slice()),
+            "batch first root of lane {i} differs from the scalar solver: {input:?}"
+        );
+    }
 }
 
 /// The quadratic fuzz target: decode, solve, check.

@@ -2,7 +2,7 @@
 //! regressions (`fuzz/regressions/<target>/`) through the same checks the fuzz targets run,
 //! so CI exercises what the fuzzer found without a nightly toolchain.
 
-use nlrt_tests::fuzz_input::{fuzz_cubic, fuzz_microtriangle, fuzz_quadratic};
+use nlrt_tests::fuzz_input::{fuzz_cubic, fuzz_cubic_batch, fuzz_microtriangle, fuzz_quadratic};
 use std::path::PathBuf;
 
 fn replay(target: &str, run: fn(&[u8])) {
@@ -35,6 +35,50 @@ fn replay_cubic_f32() {
 #[test]
 fn replay_cubic_f64() {
     replay("cubic_f64", fuzz_cubic::<f64>);
+}
+
+#[test]
+fn replay_cubic_batch_f32() {
+    replay("cubic_batch_f32", fuzz_cubic_batch::<f32>);
+}
+
+#[test]
+fn replay_cubic_batch_f64() {
+    replay("cubic_batch_f64", fuzz_cubic_batch::<f64>);
+}
+
+/// Packs the cubic corpora eight inputs to a file for the batch targets (run once by hand:
+/// `cargo test -p nlrt-tests --test fuzz_replay -- --ignored write_batch_seed_corpus`). The
+/// files are taken in name order; each input is zero-padded or cut to its full length, so a
+/// short scalar input (solved on the whole line) becomes one on `[0, 0]` or on its bytes'
+/// interval.
+#[test]
+#[ignore]
+fn write_batch_seed_corpus() {
+    use nlrt_poly::{CUBIC_BATCH, Real};
+    use nlrt_tests::fuzz_input::cubic_input_bytes;
+    fn write<T: Real>() {
+        let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../fuzz/corpus");
+        let mut files: Vec<PathBuf> = std::fs::read_dir(root.join(format!("cubic_{}", T::NAME)))
+            .unwrap()
+            .map(|e| e.unwrap().path())
+            .collect();
+        files.sort();
+        let dir = root.join(format!("cubic_batch_{}", T::NAME));
+        std::fs::create_dir_all(&dir).unwrap();
+        let width = cubic_input_bytes::<T>();
+        for (k, group) in files.chunks(CUBIC_BATCH).enumerate() {
+            let mut bytes = Vec::new();
+            for path in group {
+                let mut one = std::fs::read(path).unwrap();
+                one.resize(width, 0);
+                bytes.extend_from_slice(&one);
+            }
+            std::fs::write(dir.join(format!("packed-{k:03}")), bytes).unwrap();
+        }
+    }
+    write::<f32>();
+    write::<f64>();
 }
 
 #[test]

@@ -3,8 +3,9 @@
 //!
 //! The answers are those of [`solve_cubic_in`] and [`first_cubic_root_in`], bit for bit, for
 //! every input. The vector kernel follows the scalar solver's fast path operation by operation
-//! in eight lanes (an AVX register for `f32` where the build has AVX2 and FMA, eight scalars
-//! otherwise; every operation is exact or correctly rounded in both): the critical points and
+//! in eight lanes (one AVX register of `f32` or two of `f64` where the build has AVX2 and FMA,
+//! eight scalars otherwise; every operation is exact or correctly rounded in all of them): the
+//! critical points and
 //! the trigonometric guesses, the signs at the ends of the monotonic pieces, and the Newton
 //! steps from the guesses. A lane it cannot decide exactly as the scalar solver would (a
 //! non-finite or reversed interval, extreme coefficients, an end within rounding of a root,

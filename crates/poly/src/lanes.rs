@@ -209,7 +209,7 @@ impl<T: Real> Lanes<T> for Portable<T> {
     target_feature = "avx2",
     target_feature = "fma"
 ))]
-pub use avx2::F32x8;
+pub use avx2::{F32x8, F64x8};
 
 #[cfg(all(
     target_arch = "x86_64",
@@ -217,10 +217,10 @@ pub use avx2::F32x8;
     target_feature = "fma"
 ))]
 mod avx2 {
-    //! `__m256` lanes. SAFETY (every `unsafe` block below): the module is compiled only when
-    //! the build enables `avx2` and `fma` (cfg above), so the intrinsics are available; the
-    //! transmutes are between `[f32; 8]` and `__m256`, which have the same size and no
-    //! invalid bit patterns.
+    //! `__m256` and `__m256d` lanes. SAFETY (every `unsafe` block below): the module is
+    //! compiled only when the build enables `avx2` and `fma` (cfg above), so the intrinsics are
+    //! available; the transmutes are between `[f32; 8]` and `__m256`, and between `[f64; 4]`
+    //! and `__m256d`, which have the same size and no invalid bit patterns.
     use super::{LaneMask, Lanes};
     use core::arch::x86_64::*;
     use core::ops::{Add, BitAnd, BitOr, Div, Mul, Neg, Not, Sub};
@@ -341,7 +341,181 @@ mod avx2 {
             Self(unsafe { _mm256_blendv_ps(b.0, a.0, m.0) })
         }
     }
+
+    /// Eight `f64` lanes in two AVX registers (lanes 0-3, then 4-7).
+    #[derive(Clone, Copy, Debug)]
+    pub struct F64x8(__m256d, __m256d);
+
+    /// All-ones or all-zeros per lane, in the layout of [`F64x8`].
+    #[derive(Clone, Copy, Debug)]
+    pub struct Mask4x2(__m256d, __m256d);
+
+    impl BitAnd for Mask4x2 {
+        type Output = Self;
+        #[inline(always)]
+        fn bitand(self, o: Self) -> Self {
+            unsafe { Self(_mm256_and_pd(self.0, o.0), _mm256_and_pd(self.1, o.1)) }
+        }
+    }
+    impl BitOr for Mask4x2 {
+        type Output = Self;
+        #[inline(always)]
+        fn bitor(self, o: Self) -> Self {
+            unsafe { Self(_mm256_or_pd(self.0, o.0), _mm256_or_pd(self.1, o.1)) }
+        }
+    }
+    impl Not for Mask4x2 {
+        type Output = Self;
+        #[inline(always)]
+        fn not(self) -> Self {
+            unsafe {
+                let ones = _mm256_castsi256_pd(_mm256_set1_epi64x(-1));
+                Self(_mm256_xor_pd(self.0, ones), _mm256_xor_pd(self.1, ones))
+            }
+        }
+    }
+    impl LaneMask for Mask4x2 {
+        #[inline(always)]
+        fn bits(self) -> u8 {
+            let (low, high) = unsafe { (_mm256_movemask_pd(self.0), _mm256_movemask_pd(self.1)) };
+            (low | high << 4) as u8
+        }
+    }
+
+    macro_rules! binary_pd {
+        ($trait:ident, $f:ident, $intrinsic:ident) => {
+            impl $trait for F64x8 {
+                type Output = Self;
+                #[inline(always)]
+                fn $f(self, o: Self) -> Self {
+                    unsafe { Self($intrinsic(self.0, o.0), $intrinsic(self.1, o.1)) }
+                }
+            }
+        };
+    }
+    binary_pd!(Add, add, _mm256_add_pd);
+    binary_pd!(Sub, sub, _mm256_sub_pd);
+    binary_pd!(Mul, mul, _mm256_mul_pd);
+    binary_pd!(Div, div, _mm256_div_pd);
+
+    #[inline(always)]
+    fn sign_bit_pd() -> __m256d {
+        unsafe { _mm256_set1_pd(-0.0) }
+    }
+
+    impl Neg for F64x8 {
+        type Output = Self;
+        #[inline(always)]
+        fn neg(self) -> Self {
+            let s = sign_bit_pd();
+            unsafe { Self(_mm256_xor_pd(self.0, s), _mm256_xor_pd(self.1, s)) }
+        }
+    }
+
+    macro_rules! compare_pd {
+        ($f:ident, $predicate:ident) => {
+            #[inline(always)]
+            fn $f(self, o: Self) -> Mask4x2 {
+                unsafe {
+                    Mask4x2(
+                        _mm256_cmp_pd::<$predicate>(self.0, o.0),
+                        _mm256_cmp_pd::<$predicate>(self.1, o.1),
+                    )
+                }
+            }
+        };
+    }
+
+    impl Lanes<f64> for F64x8 {
+        type Mask = Mask4x2;
+        #[inline(always)]
+        fn splat(v: f64) -> Self {
+            unsafe { Self(_mm256_set1_pd(v), _mm256_set1_pd(v)) }
+        }
+        #[inline(always)]
+        fn from_array(v: [f64; 8]) -> Self {
+            let [a, b, c, d, e, f, g, h] = v;
+            unsafe {
+                Self(
+                    core::mem::transmute::<[f64; 4], __m256d>([a, b, c, d]),
+                    core::mem::transmute::<[f64; 4], __m256d>([e, f, g, h]),
+                )
+            }
+        }
+        #[inline(always)]
+        fn to_array(self) -> [f64; 8] {
+            let (low, high) = unsafe {
+                (
+                    core::mem::transmute::<__m256d, [f64; 4]>(self.0),
+                    core::mem::transmute::<__m256d, [f64; 4]>(self.1),
+                )
+            };
+            [
+                low[0], low[1], low[2], low[3], high[0], high[1], high[2], high[3],
+            ]
+        }
+        #[inline(always)]
+        fn mul_add(self, a: Self, b: Self) -> Self {
+            unsafe {
+                Self(
+                    _mm256_fmadd_pd(self.0, a.0, b.0),
+                    _mm256_fmadd_pd(self.1, a.1, b.1),
+                )
+            }
+        }
+        #[inline(always)]
+        fn abs(self) -> Self {
+            let s = sign_bit_pd();
+            unsafe { Self(_mm256_andnot_pd(s, self.0), _mm256_andnot_pd(s, self.1)) }
+        }
+        #[inline(always)]
+        fn sqrt(self) -> Self {
+            unsafe { Self(_mm256_sqrt_pd(self.0), _mm256_sqrt_pd(self.1)) }
+        }
+        #[inline(always)]
+        fn copysign(self, sign: Self) -> Self {
+            let s = sign_bit_pd();
+            unsafe {
+                Self(
+                    _mm256_or_pd(_mm256_andnot_pd(s, self.0), _mm256_and_pd(s, sign.0)),
+                    _mm256_or_pd(_mm256_andnot_pd(s, self.1), _mm256_and_pd(s, sign.1)),
+                )
+            }
+        }
+        compare_pd!(lt, _CMP_LT_OQ);
+        compare_pd!(le, _CMP_LE_OQ);
+        compare_pd!(gt, _CMP_GT_OQ);
+        compare_pd!(ge, _CMP_GE_OQ);
+        compare_pd!(eq, _CMP_EQ_OQ);
+        compare_pd!(ne, _CMP_NEQ_UQ);
+        #[inline(always)]
+        fn select(m: Mask4x2, a: Self, b: Self) -> Self {
+            unsafe {
+                Self(
+                    _mm256_blendv_pd(b.0, a.0, m.0),
+                    _mm256_blendv_pd(b.1, a.1, m.1),
+                )
+            }
+        }
+    }
 }
+
+/// The lanes [`Real::Batch`] uses for `f64`: two AVX registers where the build has AVX2 and
+/// FMA, eight scalars otherwise.
+#[cfg(all(
+    target_arch = "x86_64",
+    target_feature = "avx2",
+    target_feature = "fma"
+))]
+pub type F64Lanes = F64x8;
+/// The lanes [`Real::Batch`] uses for `f64`: two AVX registers where the build has AVX2 and
+/// FMA, eight scalars otherwise.
+#[cfg(not(all(
+    target_arch = "x86_64",
+    target_feature = "avx2",
+    target_feature = "fma"
+)))]
+pub type F64Lanes = Portable<f64>;
 
 /// The lanes [`Real::Batch`] uses for `f32`: one AVX register where the build has AVX2 and
 /// FMA, eight scalars otherwise.

@@ -59,8 +59,9 @@ pub trait Real:
     type Mat3: Copy + Debug + PartialEq + Send + Sync + 'static;
     /// The unsigned integer of the same width, for bit manipulation.
     type Bits: Copy + Debug + Eq + Ord;
-    /// Eight values side by side for the batch solvers (an AVX register for `f32` where the
-    /// build has AVX2 and FMA). An implementation detail of [`crate::solve_cubic_batch_in`].
+    /// Eight values side by side for the batch solvers (one AVX register of `f32` or two of
+    /// `f64` where the build has AVX2 and FMA, eight scalars otherwise). An implementation
+    /// detail of [`crate::solve_cubic_batch_in`].
     #[doc(hidden)]
     type Batch: crate::lanes::Lanes<Self>;
 
@@ -435,7 +436,7 @@ macro_rules! impl_real {
 impl_real!(f32, u32, glam::Vec2, glam::Vec3, glam::Mat3, batch: crate::lanes::F32Lanes,
     sqrt: sqrtf, cbrt: cbrtf, fma: fmaf, acos: acosf, cos: cosf,
     hw_fma: _mm_fmadd_ss, set: _mm_set_ss, get: _mm_cvtss_f32);
-impl_real!(f64, u64, glam::DVec2, glam::DVec3, glam::DMat3, batch: crate::lanes::Portable<f64>,
+impl_real!(f64, u64, glam::DVec2, glam::DVec3, glam::DMat3, batch: crate::lanes::F64Lanes,
     sqrt: sqrt, cbrt: cbrt, fma: fma, acos: acos, cos: cos,
     hw_fma: _mm_fmadd_sd, set: _mm_set_sd, get: _mm_cvtsd_f64);
 
