@@ -128,3 +128,66 @@ macro_rules! solver_properties {
 
 // Root exponents stay where the cubic's coefficients (products of three roots) are finite.
 solver_properties!(f32: 40, f64: 300);
+
+/// One lane of a batch: a cubic from three roots (the ray tracer's kind, on an interval
+/// around them, or around only some of them) or raw bit patterns (anything at all).
+fn batch_lane<T: Real>() -> impl Strategy<Value = ([T; 4], T, T)> {
+    let from_roots = (three_roots(8), -300.0f64..300.0, -300.0f64..300.0).prop_map(|(r, a, b)| {
+        let lo = r.iter().fold(f64::INFINITY, |m, &x| m.min(x));
+        let span = r.iter().fold(f64::NEG_INFINITY, |m, &x| m.max(x)) - lo;
+        // ends from just outside all roots to inside the spread
+        let (x, y) = (lo + span * a / 200.0, lo + span * b / 200.0);
+        (
+            cubic_from_roots::<T>(r, 1.0),
+            T::from_f64(x.min(y)),
+            T::from_f64(x.max(y)),
+        )
+    });
+    let raw = (any::<[u64; 4]>(), any::<u64>(), any::<u64>()).prop_map(|(c, lo, hi)| {
+        (
+            c.map(T::from_bits_u64),
+            T::from_bits_u64(lo),
+            T::from_bits_u64(hi),
+        )
+    });
+    prop_oneof![3 => from_roots, 1 => raw]
+}
+
+/// `solve_cubic_batch_in` and `first_cubic_root_batch_in` against the scalar calls, every lane
+/// bit for bit, on batches that mix lanes of both kinds.
+fn batch_matches_scalar<T: Real>(lanes: &[([T; 4], T, T)]) -> Result<(), TestCaseError> {
+    use nlrt_poly::{CUBIC_BATCH, first_cubic_root_batch_in, solve_cubic_batch_in};
+    let c: [[T; 4]; CUBIC_BATCH] = core::array::from_fn(|i| lanes[i].0);
+    let lo: [T; CUBIC_BATCH] = core::array::from_fn(|i| lanes[i].1);
+    let hi: [T; CUBIC_BATCH] = core::array::from_fn(|i| lanes[i].2);
+    let all = solve_cubic_batch_in(&c, &lo, &hi);
+    let first = first_cubic_root_batch_in(&c, &lo, &hi);
+    let bits = |r: &[T]| r.iter().map(|v| v.to_bits_u64()).collect::<Vec<_>>();
+    for i in 0..CUBIC_BATCH {
+        let scalar = solve_cubic_in(c[i], lo[i], hi[i]);
+        prop_assert_eq!(bits(&all[i]), bits(&scalar), "lane {}: {:?}", i, lanes[i]);
+        let scalar_first = first_cubic_root_in(c[i], lo[i], hi[i]);
+        prop_assert_eq!(
+            bits(first[i].as_slice()),
+            bits(scalar_first.as_slice()),
+            "first root, lane {}: {:?}",
+            i,
+            lanes[i]
+        );
+    }
+    Ok(())
+}
+
+proptest! {
+    #![proptest_config(config())]
+
+    #[test]
+    fn batch_equals_scalar_f32(lanes in prop::collection::vec(batch_lane::<f32>(), 8)) {
+        batch_matches_scalar(&lanes)?;
+    }
+
+    #[test]
+    fn batch_equals_scalar_f64(lanes in prop::collection::vec(batch_lane::<f64>(), 8)) {
+        batch_matches_scalar(&lanes)?;
+    }
+}
