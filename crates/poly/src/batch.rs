@@ -5,9 +5,8 @@
 //! every input. The vector kernel follows the scalar solver's fast path operation by operation
 //! in eight lanes (one AVX register of `f32` or two of `f64` where the build has AVX2 and FMA,
 //! eight scalars otherwise; every operation is exact or correctly rounded in all of them): the
-//! critical points and
-//! the trigonometric guesses, the signs at the ends of the monotonic pieces, and the Newton
-//! steps from the guesses. A lane it cannot decide exactly as the scalar solver would (a
+//! critical points and the trigonometric guesses, the signs at the ends of the monotonic
+//! pieces, and the Newton steps from the guesses. A lane it cannot decide exactly as the scalar solver would (a
 //! non-finite or reversed interval, extreme coefficients, an end within rounding of a root,
 //! one real root where the scalar solver starts from Cardano's formula, a Newton run that has
 //! not converged in [`FAST_STEPS`] steps) is handed to the scalar solver. What the kernel

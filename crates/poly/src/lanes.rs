@@ -72,10 +72,32 @@ pub trait Lanes<T: Real>:
 }
 
 /// Eight scalars: the reference implementation of [`Lanes`], and the one used without AVX2.
+#[cfg_attr(
+    all(
+        target_arch = "x86_64",
+        target_feature = "avx2",
+        target_feature = "fma"
+    ),
+    allow(
+        dead_code,
+        reason = "with AVX2 and FMA only the tests run the portable lanes"
+    )
+)]
 #[derive(Clone, Copy, Debug)]
 pub struct Portable<T>([T; LANES]);
 
 /// The mask of [`Portable`].
+#[cfg_attr(
+    all(
+        target_arch = "x86_64",
+        target_feature = "avx2",
+        target_feature = "fma"
+    ),
+    allow(
+        dead_code,
+        reason = "with AVX2 and FMA only the tests run the portable lanes"
+    )
+)]
 #[derive(Clone, Copy, Debug)]
 pub struct PortableMask(u8);
 
@@ -132,6 +154,17 @@ impl<T: Real> Neg for Portable<T> {
 }
 
 impl<T: Real> Portable<T> {
+    #[cfg_attr(
+        all(
+            target_arch = "x86_64",
+            target_feature = "avx2",
+            target_feature = "fma"
+        ),
+        allow(
+            dead_code,
+            reason = "with AVX2 and FMA only the tests run the portable lanes"
+        )
+    )]
     #[inline(always)]
     fn compare(self, o: Self, f: impl Fn(T, T) -> bool) -> PortableMask {
         let mut bits = 0u8;
