@@ -8,10 +8,14 @@
 
 mod common;
 
+use nlrt_oracle::ExactPoly;
 use nlrt_oracle::shell::{ShellScene, true_microtriangle_hit};
 use nlrt_poly::{Real, Vector2, Vector3};
-use nlrt_shellmap::{NonlinearRay, Prism, Ray, TexturePlane, intersect_microtriangle};
+use nlrt_shellmap::{
+    NonlinearRay, Prism, Ray, TextureCurve, TexturePlane, intersect_microtriangle,
+};
 use proptest::prelude::*;
+use rug::Rational;
 
 fn config() -> ProptestConfig {
     common::proptest_config(64, 2000)
@@ -255,4 +259,99 @@ proptest! {
             prop_assert!(err <= TOL_ULPS * f64::from(f32::UNIT_ROUNDOFF), "f32 scaled error {err:e}");
         }
     }
+
+    #[test]
+    fn uv_enclosure_holds_the_curve(
+        r in prop::array::uniform24(-1.0f64..1.0),
+        o in prop::array::uniform3(-1.0f64..1.0),
+        ends in prop::array::uniform2(0.0f64..1.0),
+        shrink in 0i32..16,
+    ) {
+        uv_enclosure_check::<f64>(&r, o, ends, shrink)?;
+        uv_enclosure_check::<f32>(&r, o, ends, shrink)?;
+    }
+}
+
+/// A sheared prism for the enclosure: normals tilted by up to 0.5, uvs a distorted triangle
+/// away from the origin (so `u` and `D` vary together, the case the centred form is for).
+fn sheared_prism<T: Real>(r: &[f64; 24]) -> Prism<T> {
+    let v = |x: f64, y: f64, z: f64| T::Vec3::new(T::from_f64(x), T::from_f64(y), T::from_f64(z));
+    let w = |x: f64, y: f64| T::Vec2::new(T::from_f64(x), T::from_f64(y));
+    Prism::new(
+        [
+            v(0.1 * r[0], 0.1 * r[1], 0.1 * r[2]),
+            v(1.0 + 0.1 * r[3], 0.1 * r[4], 0.1 * r[5]),
+            v(0.1 * r[6], 1.0 + 0.1 * r[7], 0.1 * r[8]),
+        ],
+        [
+            v(0.5 * r[9], 0.5 * r[10], 1.0 + 0.3 * r[11]),
+            v(0.5 * r[12], 0.5 * r[13], 1.0 + 0.3 * r[14]),
+            v(0.5 * r[15], 0.5 * r[16], 1.0 + 0.3 * r[17]),
+        ],
+        [
+            w(3.0 + 0.2 * r[18], 5.0 + 0.2 * r[19]),
+            w(4.0 + 0.2 * r[20], 5.0 + 0.2 * r[21]),
+            w(3.0 + 0.2 * r[22], 6.0 + 0.2 * r[23]),
+        ],
+    )
+}
+
+/// [`TextureCurve::uv_enclosure`] over `[a, b]` (random ends in `[0, 1]`, the interval then
+/// shrunk by `2^shrink` towards `a`, down to the short stretches of a walk's deep nodes) holds
+/// the curve of the ray's quadratics, `U(h) / D(h)` and `V(h) / D(h)` evaluated exactly
+/// (rationals), at 65 heights of the interval: no tolerance, the enclosure is a bound.
+fn uv_enclosure_check<T: Real>(
+    r: &[f64; 24],
+    o: [f64; 3],
+    ends: [f64; 2],
+    shrink: i32,
+) -> Result<(), TestCaseError> {
+    let prism = sheared_prism::<T>(r);
+    let v = |x: f64, y: f64, z: f64| T::Vec3::new(T::from_f64(x), T::from_f64(y), T::from_f64(z));
+    let target = prism.shell_point(T::from_f64(0.3), T::from_f64(0.3), T::from_f64(0.5));
+    let origin = v(o[0] * 2.0, o[1] * 2.0, 1.5 + 3.0 * o[2].abs());
+    let Some(ray) = Ray::new(origin, target - origin) else {
+        return Ok(());
+    };
+    let nl = NonlinearRay::new(&prism, &ray);
+    let curve = TextureCurve::new(&prism, &nl);
+    let a = ends[0].min(ends[1]);
+    let b = a + (ends[0] - ends[1]).abs() * 2f64.powi(-shrink);
+    let (a, b) = (T::from_f64(a), T::from_f64(b));
+    let Some([u_lo, u_hi, v_lo, v_hi]) = curve.uv_enclosure(a, b) else {
+        return Ok(());
+    };
+    prop_assert!(
+        u_lo <= u_hi && v_lo <= v_hi,
+        "{:?}",
+        [u_lo, u_hi, v_lo, v_hi]
+    );
+    let exact = |c: &[T; 3]| ExactPoly::from_f64s(&c.map(|x| x.to_f64())).expect("finite");
+    let (u, w, d) = (exact(&nl.u), exact(&nl.v), exact(&nl.d));
+    let q = |x: T| Rational::from_f64(x.to_f64()).expect("finite");
+    for i in 0..=64 {
+        let h = (a + (b - a) * T::from_f64(f64::from(i) / 64.0))
+            .max(a)
+            .min(b);
+        let h = q(h);
+        let dh = d.eval(&h);
+        prop_assert!(
+            dh.cmp0() != core::cmp::Ordering::Equal,
+            "a pole inside an enclosure"
+        );
+        let (uh, vh) = (u.eval(&h) / &dh, w.eval(&h) / &dh);
+        prop_assert!(
+            q(u_lo) <= uh && uh <= q(u_hi),
+            "u = {} outside [{u_lo}, {u_hi}] on [{a}, {b}] ({})",
+            uh.to_f64(),
+            T::NAME
+        );
+        prop_assert!(
+            q(v_lo) <= vh && vh <= q(v_hi),
+            "v = {} outside [{v_lo}, {v_hi}] on [{a}, {b}] ({})",
+            vh.to_f64(),
+            T::NAME
+        );
+    }
+    Ok(())
 }

@@ -184,6 +184,61 @@ impl<'a, T: Real> TextureCurve<'a, T> {
         !(lo > margin || hi < -margin)
     }
 
+    /// An enclosure `[u_lo, u_hi, v_lo, v_hi]` of the curve's `(u(h), v(h))` for `h` in
+    /// `[h_lo, h_hi]`, widened by the rounding bound of [`TextureCurve::crossings`], so that a
+    /// box whose uv rectangle misses it holds no piece of [`TextureCurve::box_pieces`] at
+    /// those heights, and a line `u = c` outside `[u_lo, u_hi]` has no crossing there (nor at
+    /// any heights inside them: the same enclosure covers every sub-interval). `None` where
+    /// the denominator may vanish on the interval (no bound).
+    ///
+    /// In centred form around the interval's midpoint `m` (half-width `r`): with `c` the
+    /// curve's `u` there, `u - c = q / D` for the line quadratic `q = U - c D` of
+    /// [`TextureCurve::crossings`], and on the interval `|q| <= |q(m)| + |q'(m)| r + |q_2| r^2`
+    /// (Taylor at `m`, exact for a quadratic; `q(m)` is nearly 0 by the choice of `c`) while
+    /// `|D| >= |D(m)| - |D'(m)| r - |D_2| r^2`. The bound shrinks with the interval (as
+    /// `|u'(m)| r`), unlike a quotient of the ranges of `U` and `D` (whose width stays
+    /// `|u| ΔD / D`), and needs two divisions, which keep it cheap enough for every node of
+    /// the BLAS walk. Rounding: the `gamma(8)` bound of the coefficients and an evaluation,
+    /// once more for the evaluations at `m`, and `8 u` relative on each sum and quotient.
+    #[must_use]
+    #[inline]
+    pub fn uv_enclosure(&self, h_lo: T, h_hi: T) -> Option<[T; 4]> {
+        let ray = self.ray;
+        let gamma8 = self.gamma8;
+        let eight_u = T::from_i32(8) * T::UNIT_ROUNDOFF;
+        let up = |x: T| x + (x.abs() * eight_u + T::MIN_POSITIVE);
+        let down = |x: T| x - (x.abs() * eight_u + T::MIN_POSITIVE);
+        let m = (h_lo + h_hi) * T::HALF;
+        let r = up((h_hi - m).max(m - h_lo));
+        let x = h_lo.abs().max(h_hi.abs());
+        // `|p(m)| + |p'(m)| r + |p_2| r^2` for a quadratic `p` on the interval.
+        let spread = |p: &[T; 3]| {
+            let slope = (T::TWO * p[2]).mul_add(m, p[1]);
+            (p[2].abs() * r).mul_add(r, slope.abs() * r)
+        };
+        let d = &ray.d;
+        let d_abs = quadratic(&self.md, x);
+        let d_m = quadratic(d, m);
+        let d_min = down(d_m.abs() - up(spread(d) + T::TWO * gamma8 * d_abs));
+        if !(d_min > T::ZERO) {
+            return None;
+        }
+        let (inv_m, inv_min) = (T::ONE / d_m, up(T::ONE / d_min));
+        let around = |axis: usize| {
+            // Any centre gives an enclosure; the midpoint's value gives the tightest.
+            let num = if axis == 0 { &ray.u } else { &ray.v };
+            let c = quadratic(num, m) * inv_m;
+            let (q, mag) = self.line(axis, c);
+            let err = gamma8 * c.abs().mul_add(d_abs, quadratic(mag, x));
+            let q_max = up(quadratic(&q, m).abs() + up(spread(&q) + T::TWO * err));
+            let bound = up(q_max * inv_min);
+            (down(c - bound), up(c + bound))
+        };
+        let (u_lo, u_hi) = around(0);
+        let (v_lo, v_hi) = around(1);
+        Some([u_lo, u_hi, v_lo, v_hi])
+    }
+
     /// Calls `piece` for each stretch of the curve inside the texture-space box `lo..=hi`
     /// (each `(u, v, h)`) whose distances along the world ray meet `[t_min, t_max]`: its
     /// heights `h_in..=h_out` and distances `t_in..=t_out` (clamped to `[t_min, t_max]`).
@@ -201,54 +256,17 @@ impl<'a, T: Real> TextureCurve<'a, T> {
         if !(h_lo <= h_hi && lo[0] <= hi[0] && lo[1] <= hi[1]) {
             return;
         }
-        let ray = self.ray;
-        let gamma8 = self.gamma8;
-        let eight_u = T::from_i32(8) * T::UNIT_ROUNDOFF;
-        // Early rejection by interval arithmetic: the ranges of U, V and D over [h_lo, h_hi]
-        // (ends and vertex of each quadratic), then u = U / D and v = V / D by interval
-        // division where D keeps one sign, widened by the same rounding bound as the exact
-        // test below. Sound (never rejects what the exact test keeps) and cheap; most boxes
-        // of a traversal are rejected here without solving a quadratic.
-        let range = |c: &[T; 3]| quadratic_range(c, h_lo, h_hi);
-        let (d_lo, d_hi) = range(&ray.d);
-        let h_abs = h_lo.abs().max(h_hi.abs());
-        let d_err = gamma8 * quadratic(&self.md, h_abs);
-        let d_keeps_sign = d_lo - d_err > T::ZERO || d_hi + d_err < T::ZERO;
-        if d_keeps_sign {
-            let (d_min, d_max) = if d_lo > T::ZERO {
-                (d_lo - d_err, d_hi + d_err)
-            } else {
-                (-(d_hi + d_err), -(d_lo - d_err))
-            };
-            let sign = if d_lo > T::ZERO { T::ONE } else { -T::ONE };
-            let quotient = |c: &[T; 3], m: &[T; 3]| {
-                let (q_lo, q_hi) = range(c);
-                let err = gamma8 * quadratic(m, h_abs);
-                let (q_lo, q_hi) = if sign > T::ZERO {
-                    (q_lo - err, q_hi + err)
-                } else {
-                    (-(q_hi + err), -(q_lo - err))
-                };
-                // q / d for q in [q_lo, q_hi], d in [d_min, d_max] with d_min > 0.
-                let lo_r = if q_lo >= T::ZERO {
-                    q_lo / d_max
-                } else {
-                    q_lo / d_min
-                };
-                let hi_r = if q_hi >= T::ZERO {
-                    q_hi / d_min
-                } else {
-                    q_hi / d_max
-                };
-                // One more relative rounding of the divisions.
-                (lo_r - lo_r.abs() * eight_u, hi_r + hi_r.abs() * eight_u)
-            };
-            let (u_lo, u_hi) = quotient(&ray.u, &self.mu);
-            let (v_lo, v_hi) = quotient(&ray.v, &self.mv);
-            if u_hi < lo[0] || u_lo > hi[0] || v_hi < lo[1] || v_lo > hi[1] {
-                return;
-            }
+        // Early rejection by interval arithmetic (see `uv_enclosure`): sound (never rejects
+        // what the exact test keeps) and cheap; most boxes of a traversal are rejected here
+        // without solving a quadratic.
+        let enclosure = self.uv_enclosure(h_lo, h_hi);
+        if let Some([u_lo, u_hi, v_lo, v_hi]) = enclosure
+            && (u_hi < lo[0] || u_lo > hi[0] || v_hi < lo[1] || v_lo > hi[1])
+        {
+            return;
         }
+        let d_keeps_sign = enclosure.is_some();
+        let ray = self.ray;
         let mut candidates = [T::ZERO; MAX_CANDIDATES];
         let mut n = 0;
         let mut push = |h: T| {
