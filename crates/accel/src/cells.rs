@@ -7,7 +7,7 @@ use nlrt_poly::{Real, Vector2};
 use nlrt_shellmap::{BaseEdges, NonlinearRay, Prism, TextureCurve, intersect_box};
 
 use crate::stats::TraversalStats;
-use crate::tlas::{RootNodes, texel_floor};
+use crate::tlas::RootNodes;
 
 #[derive(Clone, Copy)]
 struct Pending<T> {
@@ -154,16 +154,6 @@ impl<T: Real> Stretch<T> {
     }
 }
 
-/// A node's split line on one axis as its stretch's curve sees it.
-#[derive(Clone, Copy)]
-enum SplitLine<T> {
-    /// The line at this coordinate, which the curve may cross: its crossings cut the stretch.
-    Cut(T),
-    /// The curve stays on this side (0: below, 1: above) of the line, or there is no line on
-    /// this axis (side 0: a root range one node wide).
-    Side(u8),
-}
-
 /// Stretches one node may hand to its children before the traversal gives up on stretches
 /// (see [`traverse_curve_cells`]): a stretch meets each of the two split lines at most twice
 /// (they are quadratics), so it falls into at most 5 pieces, each in one child; only a piece
@@ -194,13 +184,6 @@ pub(crate) const CURVE_STACK: usize = 48;
 /// in the box test: a piece's ends at a crossing are widened by the crossing's error window,
 /// and a piece whose midpoint is within the rounding bound of a split line goes to both
 /// sides (a curve running along a texel edge).
-///
-/// Levels with nothing to split are skipped: where the curve's uv enclosure over a stretch's
-/// heights ([`TextureCurve::uv_enclosure`], a rigorous bound, rounding included) lies strictly
-/// inside the square of one descendant of the node, the stretch goes straight to the deepest
-/// such descendant, clipped to its height bounds (which lie within every ancestor's, so the
-/// levels between would have clipped nothing more); and a split line the enclosure stays off
-/// is not solved for, the piece's side on that axis being known.
 ///
 /// Order and culling: along a stretch the distance is monotonic in the height where the
 /// shell does not fold (a point of the ray has one height), so children are visited in
@@ -248,53 +231,6 @@ pub(crate) fn traverse_curve_cells<T: Real>(
         let hi = [T::from_f64((cx0 + k) as f64), T::from_f64((cy0 + k) as f64)];
         uv_tri.meets_square(lo, hi)
     };
-    // The deepest node below `node` (level, x, y) whose square holds the stretch's curve, as
-    // far as it lies in `node`'s square: where the curve's uv enclosure `[u_lo, u_hi, v_lo,
-    // v_hi]` over the stretch meets no split line between, strictly, as the walk's own line
-    // values decide (the corners' cells only propose the node; the lines confirm it). `None`
-    // when the enclosure meets a split line of `node` itself: then `split` cuts the stretch.
-    let cell_units = T::ONE / cell_size;
-    let descend = |node: &Stretch<T>, [u_lo, u_hi, v_lo, v_hi]: [T; 4]| {
-        let k = 1i64 << node.level;
-        let (x0, y0) = (i64::from(node.x) * k, i64::from(node.y) * k);
-        // The cell of `w` clamped to the node's cells `start..start + k` (NaN: `start`).
-        let index = |w: T, start: i64| {
-            let x = (w * cell_units).to_f64();
-            if !(x >= (start + 1) as f64) {
-                start
-            } else if !(x < (start + k - 1) as f64) {
-                start + k - 1
-            } else {
-                i64::from(texel_floor(x))
-            }
-        };
-        let (ix, iy) = (index(u_lo, x0), index(v_lo, y0));
-        let spread = (ix ^ index(u_hi, x0)) | (iy ^ index(v_hi, y0));
-        let level = i64::BITS - spread.leading_zeros();
-        if level >= node.level {
-            return None;
-        }
-        let size = 1i64 << level;
-        let (cx, cy) = (ix >> level, iy >> level);
-        // Strictly between the node's bounding lines, except where they bound `node` too.
-        let between = |w_lo: T, w_hi: T, c: i64, start: i64| {
-            let (lo, hi) = (c * size, (c + 1) * size);
-            (lo == start || w_lo > cell(lo)) && (hi == start + k || w_hi < cell(hi))
-        };
-        (between(u_lo, u_hi, cx, x0) && between(v_lo, v_hi, cy, y0))
-            .then_some((level, cx as i32, cy as i32))
-    };
-    // A split line at `line` seen by a stretch whose curve's enclosure on that axis is
-    // `[lo, hi]`: wholly on one side of it (strictly), or possibly crossing it.
-    let split_line = |line: T, lo: T, hi: T| {
-        if hi < line {
-            SplitLine::Side(0)
-        } else if lo > line {
-            SplitLine::Side(1)
-        } else {
-            SplitLine::Cut(line)
-        }
-    };
     // Sorted insertion, nearest first (few entries); false when full. A piece for a child
     // that already has one from the same stretch is merged into it (the hull of their
     // heights: a superset, which the leaf test allows). Without the merge a curve within
@@ -324,11 +260,11 @@ pub(crate) fn traverse_curve_cells<T: Real>(
         *n += 1;
         true
     };
-    // Cuts `stretch` (heights `[a, b]`) at the crossings of the split lines and hands each
-    // piece to its child at `level`, `(x + qx, y + qy)`, clipped to the child's height bounds,
-    // nearest first into `found`; false when `found` is full.
+    // Cuts `stretch` (heights `[a, b]`) at the crossings of the split lines (`None`: no line
+    // on that axis) and hands each piece to its child at `level`, `(x + qx, y + qy)`, clipped
+    // to the child's height bounds, nearest first into `found`; false when `found` is full.
     let split = |stretch: &Stretch<T>,
-                 lines: [SplitLine<T>; 2],
+                 lines: [Option<T>; 2],
                  (level, x, y): (u32, i32, i32),
                  found: &mut [Stretch<T>],
                  n: &mut usize,
@@ -339,7 +275,7 @@ pub(crate) fn traverse_curve_cells<T: Real>(
         let mut cuts = [(a, T::ZERO); 6];
         let mut m = 1;
         for (axis, line) in lines.iter().enumerate() {
-            if let SplitLine::Cut(line) = *line {
+            if let Some(line) = *line {
                 let (roots, k) = curve.crossings(axis, line, a, b);
                 for &r in &roots[..k] {
                     cuts[m] = r;
@@ -363,14 +299,15 @@ pub(crate) fn traverse_curve_cells<T: Real>(
             let mut sides = [[0u8, 0]; 2];
             let uv = curve.uv_with_error((c0 + c1) * T::HALF);
             for (k, line) in lines.iter().enumerate() {
-                sides[k] = match (*line, uv) {
-                    (SplitLine::Side(side), _) => [side, side],
-                    (SplitLine::Cut(line), Some((uv, e))) => [
-                        u8::from(uv[k] > line + e[k]),
-                        u8::from(uv[k] >= line - e[k]),
-                    ],
-                    (SplitLine::Cut(_), None) => [0, 1],
-                };
+                if let Some(line) = *line {
+                    sides[k] = match uv {
+                        Some((uv, e)) => [
+                            u8::from(uv[k] > line + e[k]),
+                            u8::from(uv[k] >= line - e[k]),
+                        ],
+                        None => [0, 1],
+                    };
+                }
             }
             let (lo_h, hi_h) = ((c0 - w0).max(a), (c1 + w1).min(b));
             for qy in sides[1][0]..=sides[1][1] {
@@ -440,16 +377,8 @@ pub(crate) fn traverse_curve_cells<T: Real>(
         }
         let k = 1i64 << root.level;
         let lines = [
-            if root.nx == 2 {
-                SplitLine::Cut(cell(i64::from(root.x + 1) * k))
-            } else {
-                SplitLine::Side(0)
-            },
-            if root.ny == 2 {
-                SplitLine::Cut(cell(i64::from(root.y + 1) * k))
-            } else {
-                SplitLine::Side(0)
-            },
+            (root.nx == 2).then(|| cell(i64::from(root.x + 1) * k)),
+            (root.ny == 2).then(|| cell(i64::from(root.y + 1) * k)),
         ];
         for (stretch, _) in roots[..n].iter().rev() {
             let mut found = [empty; STRETCHES_PER_NODE];
@@ -479,42 +408,13 @@ pub(crate) fn traverse_curve_cells<T: Real>(
             }
             continue;
         }
-        // The curve's uv enclosure over the stretch (`None`: no bound, or not a number).
-        let enclosure = curve
-            .uv_enclosure(node.h[0], node.h[1])
-            .filter(|e| e[0] <= e[1] && e[2] <= e[3]);
-        if let Some((level, x, y)) = enclosure.and_then(|e| descend(&node, e)) {
-            // The stretch goes down whole: the walk would hand it to one child per level,
-            // clipped to each level's height bounds, of which the innermost are kept here.
-            if wanted(level, x, y) {
-                stats.box_tests += 1;
-                let [lo, hi] = node_heights(level, x, y);
-                let h = [node.h[0].max(lo), node.h[1].min(hi)];
-                if h[0] <= h[1] {
-                    stack[depth] = Stretch {
-                        level,
-                        x,
-                        y,
-                        h,
-                        ..node
-                    };
-                    depth += 1;
-                }
-            }
-            continue;
-        }
         let level = node.level - 1;
         let (x, y) = (node.x * 2, node.y * 2);
         let half = 1i64 << level;
-        let lines = [cell(i64::from(x + 1) * half), cell(i64::from(y + 1) * half)];
-        // An axis whose line the enclosure stays off needs no crossings.
-        let lines = match enclosure {
-            Some([u_lo, u_hi, v_lo, v_hi]) => [
-                split_line(lines[0], u_lo, u_hi),
-                split_line(lines[1], v_lo, v_hi),
-            ],
-            None => lines.map(SplitLine::Cut),
-        };
+        let lines = [
+            Some(cell(i64::from(x + 1) * half)),
+            Some(cell(i64::from(y + 1) * half)),
+        ];
         let mut found = [empty; STRETCHES_PER_NODE];
         let mut n = 0;
         if !split(&node, lines, (level, x, y), &mut found, &mut n, stats) || depth + n > stack.len()

@@ -197,9 +197,10 @@ impl<'a, T: Real> TextureCurve<'a, T> {
     /// (Taylor at `m`, exact for a quadratic; `q(m)` is nearly 0 by the choice of `c`) while
     /// `|D| >= |D(m)| - |D'(m)| r - |D_2| r^2`. The bound shrinks with the interval (as
     /// `|u'(m)| r`), unlike a quotient of the ranges of `U` and `D` (whose width stays
-    /// `|u| ΔD / D`), and needs two divisions, which keep it cheap enough for every node of
-    /// the BLAS walk. Rounding: the `gamma(8)` bound of the coefficients and an evaluation,
-    /// once more for the evaluations at `m`, and `8 u` relative on each sum and quotient.
+    /// `|u| ΔD / D`), which makes it the better early rejection for the short height
+    /// intervals of a walk's pieces (the shell's tile search); it costs two divisions.
+    /// Rounding: the `gamma(8)` bound of the coefficients and an evaluation, once more for
+    /// the evaluations at `m`, and `8 u` relative on each sum and quotient.
     #[must_use]
     #[inline]
     pub fn uv_enclosure(&self, h_lo: T, h_hi: T) -> Option<[T; 4]> {
