@@ -9,11 +9,13 @@
 mod common;
 
 use nlrt_oracle::ExactPoly;
-use nlrt_oracle::shell::{ShellScene, true_microtriangle_hit};
+use nlrt_oracle::shell::{ShellScene, true_microtriangle_hit, true_nonlinear_alpha_beta};
 use nlrt_poly::{Real, Vector2, Vector3};
 use nlrt_shellmap::{
-    NonlinearRay, Prism, Ray, TextureCurve, TexturePlane, intersect_microtriangle,
+    BaseEdges, NonlinearRay, Prism, Ray, TextureCurve, TexturePlane, decidedly_outside_in_f64,
+    intersect_microtriangle,
 };
+use nlrt_tests::geometry::SplitMix64;
 use proptest::prelude::*;
 use rug::Rational;
 
@@ -354,4 +356,94 @@ fn uv_enclosure_check<T: Real>(
         );
     }
     Ok(())
+}
+
+/// `decidedly_outside_in_f64` never calls a height outside the base triangle across an edge
+/// where the exact curve (MPFR, from the same f32 inputs) is inside it, and decides the
+/// heights in the f32 crossings' error windows that f32 itself cannot: f32 sheared prisms,
+/// steep and grazing rays (nearly parallel to the prism's layers, where the windows are
+/// widest), heights at fractions of each f32 edge crossing's window on both sides and at
+/// random.
+#[test]
+fn edge_sides_decided_in_f64_agree_with_the_oracle() {
+    let mut rng = SplitMix64::new(0x0ed9e);
+    let (mut decided, mut windows_decided, mut windows) = (0u32, 0u32, 0u32);
+    // Window heights that f32 leaves undecided and f64 decides.
+    let mut only_in_f64 = 0u32;
+    for case in 0..3000 {
+        let r: [f64; 24] = core::array::from_fn(|_| rng.unit() * 2.0 - 1.0);
+        let prism = sheared_prism::<f32>(&r);
+        let target = prism.shell_point(
+            rng.unit() as f32 * 0.6 + 0.1,
+            rng.unit() as f32 * 0.6 + 0.1,
+            rng.unit() as f32,
+        );
+        // Every other ray grazes: its height component 1e-4 to 1e-1 of its length.
+        let angle = rng.unit() * core::f64::consts::TAU;
+        let rise = if case % 2 == 0 {
+            (rng.unit() * 3.0 - 4.0).exp2() * 10f64.powi(-(rng.unit() * 3.0) as i32)
+        } else {
+            0.3 + rng.unit()
+        };
+        let dir = nlrt_poly::glam::Vec3::new(angle.cos() as f32, angle.sin() as f32, -rise as f32);
+        let Some(ray) = Ray::new(target - dir * 3.0, dir) else {
+            continue;
+        };
+        let nl = NonlinearRay::new(&prism, &ray);
+        let edges = BaseEdges::new(&nl);
+        let scene = ShellScene {
+            p: prism.p.map(|v| [v.x, v.y, v.z].map(f64::from)),
+            n: prism.n.map(|v| [v.x, v.y, v.z].map(f64::from)),
+            uv: prism.uv.map(|v| [v.x, v.y].map(f64::from)),
+            origin: [ray.origin.x, ray.origin.y, ray.origin.z].map(f64::from),
+            dir: [ray.dir.x, ray.dir.y, ray.dir.z].map(f64::from),
+            tri: [[0.0; 3]; 3],
+        };
+        let quadratics = [
+            nl.alpha,
+            nl.beta,
+            core::array::from_fn(|i| nl.alpha[i] + nl.beta[i] - nl.d[i]),
+        ];
+        for (k, quadratic) in quadratics.into_iter().enumerate() {
+            let mut heights: Vec<(f32, bool)> = vec![(rng.unit() as f32, false)];
+            for &s in nlrt_poly::solve_quadratic_in(quadratic, 0.0, 1.0).iter() {
+                let w = edges.window(k, s).min(1.0);
+                for f in [-1.0, -0.5, -0.25, 0.25, 0.5, 1.0] {
+                    heights.push((s + w * f, true));
+                }
+            }
+            for (h, in_window) in heights {
+                windows += u32::from(in_window);
+                if !decidedly_outside_in_f64(&prism, &ray, k, h) {
+                    continue;
+                }
+                decided += 1;
+                windows_decided += u32::from(in_window);
+                only_in_f64 += u32::from(in_window && !edges.decidedly_outside(k, h));
+                let Some((alpha, beta)) = true_nonlinear_alpha_beta(&scene, f64::from(h)) else {
+                    panic!("case {case}: decided at a pole (h = {h})");
+                };
+                let outside = match k {
+                    0 => alpha < 0.0,
+                    1 => beta < 0.0,
+                    _ => alpha + beta > 1.0,
+                };
+                assert!(
+                    outside,
+                    "case {case}, edge {k}, h = {h}: called outside, exact ({alpha}, {beta})"
+                );
+            }
+        }
+    }
+    // The decision is not vacuous: most window heights beyond the crossing are decided.
+    assert!(
+        decided > 1000 && windows_decided * 4 > windows && only_in_f64 * 4 > windows_decided,
+        "{decided} decided; in windows {windows_decided} of {windows}, {only_in_f64} only in f64"
+    );
+    assert!(!decidedly_outside_in_f64(
+        &sheared_prism::<f64>(&[0.0; 24]),
+        &Ray::new(nlrt_poly::glam::DVec3::Z, -nlrt_poly::glam::DVec3::Z).unwrap(),
+        0,
+        -1.0
+    ));
 }

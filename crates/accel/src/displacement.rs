@@ -6,7 +6,7 @@ use nlrt_poly::{Real, Vector2, Vector3};
 use nlrt_poly::{decided_sign, solve_cubic_in, solve_quadratic_in};
 use nlrt_shellmap::{
     BaseEdges, Hit, NonlinearRay, Prism, Ray, TextureCurve, TexturePlane, alpha_beta_eq11,
-    facing_unit, world_normal,
+    decidedly_outside_in_f64, facing_unit, world_normal,
 };
 
 use crate::bvh::{Aabb, Bvh4};
@@ -631,6 +631,23 @@ impl<T: Real> DisplacedSurface<T> {
                     b
                 };
                 for &r in solve_cubic_in(*cubic, lo, hi).iter() {
+                    // A root in an extension is reported only where this prism may own it:
+                    // one that lies beyond doubt across the edge is the neighbour's (its piece
+                    // covers that height, its window holding the exact crossing), and this
+                    // plane's continuation there is no surface (an f32 ghost hit in front of
+                    // the neighbour's true one, where the window reaches far outside).
+                    let across = if r < a && edge >= 6 {
+                        Some(edge - 6)
+                    } else if r > b && edge_b >= 6 {
+                        Some(edge_b - 6)
+                    } else {
+                        None
+                    };
+                    if let Some(k) = across
+                        && decidedly_outside_in_f64(prism, &ray.ray, usize::from(k), r)
+                    {
+                        continue;
+                    }
                     consider(r.max(a).min(b), abh, part, &mut t_max);
                 }
             }

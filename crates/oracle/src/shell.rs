@@ -297,6 +297,31 @@ pub fn true_world_to_canonical(
 /// parallel to the cross-section there); `None` where `D(h) = 0`.
 #[must_use]
 pub fn true_nonlinear_uv(scene: &ShellScene, h: f64) -> Option<(f64, f64, f64)> {
+    let (alpha, beta, det, size) = true_canonical_at(scene, h)?;
+    let uv = scene.uv.map(|x| x.map(|v| Float::with_val(PREC, v)));
+    let at = |k: usize| {
+        Float::with_val(
+            PREC,
+            &uv[0][k]
+                + Float::with_val(PREC, &alpha * Float::with_val(PREC, &uv[1][k] - &uv[0][k]))
+                + Float::with_val(PREC, &beta * Float::with_val(PREC, &uv[2][k] - &uv[0][k])),
+        )
+    };
+    let relative_det = (Float::with_val(PREC, det.abs_ref()) / &size).to_f64();
+    Some((at(0).to_f64(), at(1).to_f64(), relative_det))
+}
+
+/// True canonical coordinates `(alpha, beta)` of the nonlinear ray of `scene` at height `h`
+/// (Eq. 7 at 512 bits, by Cramer's rule on Eq. 5), rounded to f64 (which keeps their signs);
+/// `None` where the ray is parallel to the prism's cross-section there.
+#[must_use]
+pub fn true_nonlinear_alpha_beta(scene: &ShellScene, h: f64) -> Option<(f64, f64)> {
+    true_canonical_at(scene, h).map(|(alpha, beta, _, _)| (alpha.to_f64(), beta.to_f64()))
+}
+
+/// `(alpha, beta)` of the nonlinear ray of `scene` at `h`, the determinant of Eq. 5's system
+/// and the size of its terms, at [`PREC`] bits; `None` where the determinant is 0.
+fn true_canonical_at(scene: &ShellScene, h: f64) -> Option<(Float, Float, Float, Float)> {
     let p = scene.p.map(V3::from);
     let n = scene.n.map(V3::from);
     let o = V3::from(scene.origin);
@@ -319,17 +344,7 @@ pub fn true_nonlinear_uv(scene: &ShellScene, h: f64) -> Option<(f64, f64, f64)> 
     );
     let alpha = Float::with_val(PREC, r.cross(&e1).dot(&neg_w) / &det);
     let beta = Float::with_val(PREC, e0.cross(&r).dot(&neg_w) / &det);
-    let uv = scene.uv.map(|x| x.map(|v| Float::with_val(PREC, v)));
-    let at = |k: usize| {
-        Float::with_val(
-            PREC,
-            &uv[0][k]
-                + Float::with_val(PREC, &alpha * Float::with_val(PREC, &uv[1][k] - &uv[0][k]))
-                + Float::with_val(PREC, &beta * Float::with_val(PREC, &uv[2][k] - &uv[0][k])),
-        )
-    };
-    let relative_det = (Float::with_val(PREC, det.abs_ref()) / &size).to_f64();
-    Some((at(0).to_f64(), at(1).to_f64(), relative_det))
+    Some((alpha, beta, det, size))
 }
 
 #[cfg(test)]

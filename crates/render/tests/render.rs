@@ -624,10 +624,11 @@ fn measuring_methods_together_equals_measuring_them_alone() {
 
 /// The ghost-hit tori (self-intersecting prisms under single-texel spikes, tilted normals
 /// under a checkerboard, twisted uvs with a tall shell), 64 x 64 rays: no leaks in either
-/// precision, and in f64 every hit confirmed by the oracle. f32 is not yet free of ghost hits
-/// on them (measured at 262,144 rays, docs/watertightness.md: 0.004% to 0.04% of hits, all at
-/// base-triangle edges where the ray runs nearly parallel to the prism's layers); this bounds
-/// that known failure at 0.1% of hits so that it cannot grow unnoticed.
+/// precision, in f64 every hit confirmed by the oracle, and in f32 no ghost hit. Without the
+/// f64 decision on roots in a base edge's error window (`decidedly_outside_in_f64`), f32
+/// reports 2 ghosts on the twisted torus here: this prism's plane continued across the edge,
+/// in front of the neighbour's true surface. Larger runs still find a few f32 ghosts of
+/// other kinds (docs/watertightness.md: at most 9 of 231,488 hits at 262,144 rays).
 #[test]
 fn ghost_tori_hits_are_judged_by_the_oracle() {
     use nlrt_render::watertight::measure;
@@ -648,7 +649,7 @@ fn ghost_tori_hits_are_judged_by_the_oracle() {
                     "{name} {method}"
                 );
             } else {
-                assert!(g.ghosts * 1000 <= g.hits, "{name} {method}: {g:?}");
+                assert_eq!(g.ghosts, 0, "{name} {method}: {g:?}");
             }
         }
     }

@@ -54,6 +54,47 @@ impl<T: Real> Ray<T> {
     }
 }
 
+/// Whether, at height `h`, the curve of `ray` in `prism` lies beyond doubt outside the base
+/// triangle across edge `k` (as in [`BaseEdges::window`]), decided in `f64` from the same
+/// inputs: for `f32` tracing, where a base-edge crossing's error window can reach far outside
+/// the triangle (a ray nearly parallel to the prism's layers, `D(h)` tiny), so that `f32`
+/// cannot tell on which side of the edge a root in the window lies. The `f32` inputs convert
+/// exactly; the frame of Eq. 6 is two cross products of the direction with coordinate axes
+/// (exact in `f64`, and exactly perpendicular to it, unlike a rounded orthonormal basis), so
+/// the `f64` curve is that of the very same ray and prism, and [`BaseEdges::decidedly_outside`]
+/// bounds its rounding. Always `false` for `f64` (no wider type here): callers keep every root.
+#[must_use]
+pub fn decidedly_outside_in_f64<T: Real>(prism: &Prism<T>, ray: &Ray<T>, k: usize, h: T) -> bool {
+    if T::MANTISSA_DIGITS >= f64::MANTISSA_DIGITS || k > 2 {
+        return false;
+    }
+    use nlrt_poly::glam::{DVec2, DVec3};
+    let wide = |v: T::Vec3| DVec3::new(v.x().to_f64(), v.y().to_f64(), v.z().to_f64());
+    let wide2 = |v: T::Vec2| DVec2::new(v.x().to_f64(), v.y().to_f64());
+    let prism = Prism::<f64>::new(prism.p.map(wide), prism.n.map(wide), prism.uv.map(wide2));
+    let dir = wide(ray.dir);
+    // The two axes other than the direction's largest component: their cross products with
+    // it are independent, and exact (each component a component of `dir`, or 0).
+    let largest = if dir.x.abs() >= dir.y.abs() && dir.x.abs() >= dir.z.abs() {
+        0
+    } else if dir.y.abs() >= dir.z.abs() {
+        1
+    } else {
+        2
+    };
+    let axes = [DVec3::X, DVec3::Y, DVec3::Z];
+    let frame = [
+        dir.cross(axes[(largest + 1) % 3]),
+        dir.cross(axes[(largest + 2) % 3]),
+    ];
+    let ray = Ray::<f64> {
+        origin: wide(ray.origin),
+        dir,
+    };
+    let curve = NonlinearRay::with_perpendiculars(&prism, &ray, frame);
+    BaseEdges::new(&curve).decidedly_outside(k, h.to_f64())
+}
+
 /// A linear function `c0 + c1 h`.
 type Linear<T> = [T; 2];
 
@@ -103,7 +144,17 @@ impl<T: Real> NonlinearRay<T> {
     /// The nonlinear ray of `ray` in `prism`.
     #[must_use]
     pub fn new(prism: &Prism<T>, ray: &Ray<T>) -> Self {
-        let [e0, e1] = ray.perpendiculars();
+        Self::with_perpendiculars(prism, ray, ray.perpendiculars())
+    }
+
+    /// The nonlinear ray of `ray` in `prism` from two given vectors perpendicular to the
+    /// ray's direction (Eq. 6 dots the ray equation with them); any two independent ones give
+    /// the same curve, since `alpha`, `beta`, `u` and `v` are ratios in which their frame
+    /// cancels. For a frame exactly perpendicular to a direction whose rounding
+    /// [`Ray::perpendiculars`] would perturb (e.g. cross products of `f32` vectors, exact in
+    /// `f64`).
+    #[must_use]
+    pub fn with_perpendiculars(prism: &Prism<T>, ray: &Ray<T>, [e0, e1]: [T::Vec3; 2]) -> Self {
         let [(a0, a1), (b0, b1)] = prism.edges();
         let o0 = ray.origin - prism.p[0];
         let row = |e: T::Vec3| -> [Linear<T>; 3] {
@@ -241,6 +292,26 @@ impl<T: Real> BaseEdges<T> {
         same(quadratic_at(&self.edges[0], h))
             && same(quadratic_at(&self.edges[1], h))
             && same(-quadratic_at(&self.edges[2], h))
+    }
+
+    /// Whether the curve at height `h` is outside the base triangle across edge `k` (as in
+    /// [`BaseEdges::window`]) beyond the rounding of this computation: the edge's function and
+    /// the denominator both away from 0 by more than the bound on their coefficients'
+    /// rounding (the margin of [`BaseEdges::misses`]), with the signs of outside. `false`
+    /// where either is within that bound, or `h` is not finite.
+    #[must_use]
+    #[inline]
+    pub fn decidedly_outside(&self, k: usize, h: T) -> bool {
+        let a = h.abs();
+        let margin = self.error_scale * (T::ONE + a + a * a);
+        let d = quadratic_at(&self.d, h);
+        let e = quadratic_at(&self.edges[k], h);
+        if !(d.abs() > margin && e.abs() > margin) {
+            return false;
+        }
+        // Inside needs sign(D) * A >= 0, sign(D) * B >= 0 and sign(D) * (A + B - D) <= 0.
+        let e = if k == 2 { -e } else { e };
+        (e > T::ZERO) != (d > T::ZERO)
     }
 
     /// Whether the curve is outside the triangle at every height of `[h_lo, h_hi]`, decided
