@@ -862,7 +862,11 @@ impl<T: Real> DisplacedSurface<T> {
                     1 => (s, T::ZERO),
                     _ => (T::ONE - s, s),
                 };
-                let t = ray.signed_distance(prism, alpha, beta, h);
+                // And onto the wall's heights: it spans those of the surfaces it joins, in
+                // [0, 1]; a crossing found within `reach` outside is kept by `wall_covers`
+                // only where its window meets them, so it is reported at that end.
+                let on_wall = h.max(T::ZERO).min(T::ONE);
+                let t = ray.signed_distance(prism, alpha, beta, on_wall);
                 // Cheap tests first: most crossings lie behind a hit already found.
                 if !(t >= t_min && t <= t_max) {
                     continue;
@@ -872,7 +876,7 @@ impl<T: Real> DisplacedSurface<T> {
                     continue;
                 }
                 t_max = t;
-                let hit = Hit::at(prism, t, alpha, beta, h);
+                let hit = Hit::at(prism, t, alpha, beta, on_wall);
                 let texel = [hit.u, hit.v]
                     .map(|c| crate::tlas::texel_floor((c / self.texel_size).to_f64()));
                 best = Some(SurfaceHit {
