@@ -88,6 +88,13 @@ pub trait Vector3<T: Real>:
         self.dot(self).sqrt()
     }
 
+    /// The same vector in f64: exact, since f32 and f64 components widen without rounding.
+    #[must_use]
+    #[inline(always)]
+    fn to_dvec3(self) -> glam::DVec3 {
+        glam::DVec3::new(self.x().to_f64(), self.y().to_f64(), self.z().to_f64())
+    }
+
     /// Index of the component with the largest magnitude.
     #[must_use]
     #[inline(always)]
@@ -124,6 +131,13 @@ pub trait Vector2<T: Real>:
     /// y component (v).
     #[must_use]
     fn y(self) -> T;
+
+    /// The same vector in f64: exact, since f32 and f64 components widen without rounding.
+    #[must_use]
+    #[inline(always)]
+    fn to_dvec2(self) -> glam::DVec2 {
+        glam::DVec2::new(self.x().to_f64(), self.y().to_f64())
+    }
 }
 
 macro_rules! impl_vectors {
@@ -197,6 +211,21 @@ mod tests {
                     assert_eq!(<V as Vector3<T>>::new(0.1, -3.0, 2.0).max_abs_axis(), 1);
                     assert_eq!(<V as Vector3<T>>::new(-5.0, 3.0, 2.0).max_abs_axis(), 0);
                     assert_eq!(<V as Vector3<T>>::new(0.0, 0.0, 0.0).max_abs_axis(), 0);
+                }
+
+                /// Widening keeps every bit: a subnormal, a value that is not a short decimal,
+                /// the largest finite value and a signed zero come back unchanged.
+                #[test]
+                fn widening_to_f64_is_exact() {
+                    use crate::{Real, Vector2};
+                    let tiny = T::MIN_POSITIVE / 3.0;
+                    let v = <V as Vector3<T>>::new(tiny, 0.1, -T::MAX).to_dvec3();
+                    assert_eq!([v.x, v.y, v.z], [tiny, 0.1, -T::MAX].map(|c: T| c.to_f64()));
+                    assert_eq!(T::from_f64(v.x), tiny);
+                    assert_eq!(T::from_f64(v.y), 0.1);
+                    let w = <<T as Real>::Vec2 as Vector2<T>>::new(-0.0, 1.0 / 3.0).to_dvec2();
+                    assert!(w.x == 0.0 && w.x.is_sign_negative());
+                    assert_eq!(T::from_f64(w.y), 1.0 / 3.0);
                 }
             }
         )*};

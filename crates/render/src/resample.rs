@@ -112,7 +112,7 @@ impl<T: Real> Tracer for GeometryImageTracer<T> {
         let (ray, t_min, t_max) = ray_in::<T>(origin, dir, t_min, t_max)?;
         let hit = self.image.intersect(&ray, t_min, t_max)?;
         let n = hit.normal;
-        let n = DVec3::new(n.x().to_f64(), n.y().to_f64(), n.z().to_f64()).normalize_or_zero();
+        let n = n.to_dvec3().normalize_or_zero();
         if n == DVec3::ZERO {
             return None;
         }

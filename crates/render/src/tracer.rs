@@ -23,7 +23,7 @@ impl TraceHit {
     pub(crate) fn from_precision<T: Real>(t: T, normal: T::Vec3, id: u32) -> Self {
         Self {
             t: t.to_f64(),
-            normal: to_dvec3::<T>(normal),
+            normal: normal.to_dvec3(),
             id,
         }
     }
@@ -44,11 +44,6 @@ pub(crate) fn ray_in<T: Real>(
         T::INFINITY
     };
     Some((Ray::new(v(origin), v(dir))?, T::from_f64(t_min), t_max))
-}
-
-/// A vector of precision `T` in f64.
-pub(crate) fn to_dvec3<T: Real>(v: T::Vec3) -> DVec3 {
-    DVec3::new(v.x().to_f64(), v.y().to_f64(), v.z().to_f64())
 }
 
 /// Intersection of a ray with the scene.

@@ -68,27 +68,23 @@ pub fn decidedly_outside_in_f64<T: Real>(prism: &Prism<T>, ray: &Ray<T>, k: usiz
     if T::MANTISSA_DIGITS >= f64::MANTISSA_DIGITS || k > 2 {
         return false;
     }
-    use nlrt_poly::glam::{DVec2, DVec3};
-    let wide = |v: T::Vec3| DVec3::new(v.x().to_f64(), v.y().to_f64(), v.z().to_f64());
-    let wide2 = |v: T::Vec2| DVec2::new(v.x().to_f64(), v.y().to_f64());
-    let prism = Prism::<f64>::new(prism.p.map(wide), prism.n.map(wide), prism.uv.map(wide2));
-    let dir = wide(ray.dir);
+    use nlrt_poly::glam::DVec3;
+    let prism = Prism::<f64>::new(
+        prism.p.map(Vector3::to_dvec3),
+        prism.n.map(Vector3::to_dvec3),
+        prism.uv.map(Vector2::to_dvec2),
+    );
+    let dir = ray.dir.to_dvec3();
     // The two axes other than the direction's largest component: their cross products with
     // it are independent, and exact (each component a component of `dir`, or 0).
-    let largest = if dir.x.abs() >= dir.y.abs() && dir.x.abs() >= dir.z.abs() {
-        0
-    } else if dir.y.abs() >= dir.z.abs() {
-        1
-    } else {
-        2
-    };
+    let largest = Vector3::max_abs_axis(dir);
     let axes = [DVec3::X, DVec3::Y, DVec3::Z];
     let frame = [
         dir.cross(axes[(largest + 1) % 3]),
         dir.cross(axes[(largest + 2) % 3]),
     ];
     let ray = Ray::<f64> {
-        origin: wide(ray.origin),
+        origin: ray.origin.to_dvec3(),
         dir,
     };
     let curve = NonlinearRay::with_perpendiculars(&prism, &ray, frame);
