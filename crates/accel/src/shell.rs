@@ -239,6 +239,15 @@ impl<T: Real> ShellSurface<T> {
         [tri[0] + d, tri[1] + d, tri[2] + d]
     }
 
+    /// Object triangle `k` placed in tile `(x, y)`, exactly as the tracer intersects it (the
+    /// tile offset added in `T`, so an oracle judging a hit sees the same rounded vertices).
+    /// `None` for an index beyond [`ShellObject::triangles`].
+    #[must_use]
+    pub fn placed_triangle(&self, k: u32, [x, y]: [i32; 2]) -> Option<[T::Vec3; 3]> {
+        let tri = self.object.triangles.get(k as usize)?;
+        Some(Self::shifted(tri, x, y))
+    }
+
     /// Nearest hit on object triangle `k` placed in tile `(x, y)`.
     #[inline]
     fn intersect_object_triangle(

@@ -908,6 +908,9 @@ fn main() -> ExitCode {
                 return fail("watertight", format!("{scene}: {e}"));
             }
             let side = ((rays as f64).sqrt().ceil() as usize).max(1);
+            // Shell-mapped scenes are judged for nonlinear tracing only (the other judged
+            // methods displace a height field); asking for another says so.
+            let shell = matches!(built.content, scenes::Content::Shell(_));
             let mut methods = watertight::METHODS
                 .into_iter()
                 .filter(|m| {
@@ -942,7 +945,7 @@ fn main() -> ExitCode {
                             | MethodKind::ConeRay
                             | MethodKind::ConeCone,
                         ) => false,
-                        None => true,
+                        None => !shell || matches!(m, Method::NonlinearF32 | Method::NonlinearF64),
                     };
                     precision_ok && method_ok
                 })
@@ -1024,7 +1027,9 @@ fn main() -> ExitCode {
                     distance_cell(&r),
                     r.seconds
                 );
-                if let Some(dir) = &output {
+                if let Some(dir) = &output
+                    && !shell
+                {
                     let path = dir.join(format!("{scene}-leaks-{}.png", r.method.slug()));
                     if let Err(e) = std::fs::create_dir_all(dir).and_then(|()| {
                         nlrt_render::image::write_png(

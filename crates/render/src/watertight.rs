@@ -19,7 +19,8 @@
 //! is not detected by it (a lower bound on leaks). The other direction, hits in front of the
 //! true surface, is judged per hit by the MPFR oracle ([`GhostCount`], nonlinear tracing).
 //! `NLRT_SHOW_LEAKS=1` prints each leak and each hit the oracle does not confirm.
-//! Displacement scenes only: a shell-mapped object need not cover the base.
+//! A shell-mapped object need not cover the base: shell scenes are judged by rays aimed at
+//! points of the object instead (see the `shell` submodule), for nonlinear tracing.
 
 use crate::method::Method;
 use crate::scenes::{Content, Scene};
@@ -31,6 +32,8 @@ use nlrt_poly::glam::{DVec2, DVec3};
 use nlrt_poly::{Real, Vector2, Vector3};
 use nlrt_shellmap::Ray;
 use rayon::prelude::*;
+
+mod shell;
 
 /// A hit farther than the exact base crossing by more than this relative amount counts as a
 /// leak. Distances of a correct hit carry a relative error of a few ulps times the hit's
@@ -418,6 +421,15 @@ pub fn measure_all_at_frame(
 ) -> Result<Vec<LeakReport>, String> {
     for &method in methods {
         judged_precision(method)?;
+        if matches!(scene.content, Content::Shell(_))
+            && !matches!(method, Method::NonlinearF32 | Method::NonlinearF64)
+        {
+            return Err(format!(
+                "{method}: scene '{}' is shell-mapped; its watertightness is measured for \
+                 nonlinear tracing (the other judged methods displace a height field)",
+                scene.name
+            ));
+        }
     }
     let in_f32: Vec<Method> = methods
         .iter()
@@ -584,12 +596,6 @@ fn measure_in<T: Real>(
     methods: &[Method],
     judged_hits: JudgedHits,
 ) -> Result<Vec<LeakReport>, String> {
-    if !matches!(rest.content, Content::Displacement(_)) {
-        return Err(format!(
-            "scene '{}' is shell-mapped; watertightness is measured on displacement scenes",
-            rest.name
-        ));
-    }
     let mut start = std::time::Instant::now();
     let mut tracer = Nonlinear::<T>::new(rest);
     let posed_scene;
@@ -608,10 +614,20 @@ fn measure_in<T: Real>(
             &posed_scene
         }
     };
-    let Nonlinear::Displaced(surface) = &tracer else {
-        unreachable!("displacement scene")
-    };
     let n = rays_side;
+    let surface = match &tracer {
+        Nonlinear::Displaced(surface) => surface,
+        Nonlinear::Shell(surface) => {
+            return Ok(methods
+                .iter()
+                .map(|&method| {
+                    let report = shell::measure(scene, surface, n * n, method, judged_hits, start);
+                    start = std::time::Instant::now();
+                    report
+                })
+                .collect());
+        }
+    };
     let decisions = decide(scene, surface, n);
     let mut reports = Vec::with_capacity(methods.len());
     for &method in methods {
@@ -743,6 +759,33 @@ fn grid_ray<T: Real>(scene: &Scene, n: usize, k: usize) -> Option<Ray<T>> {
     Ray::new(v(scene.camera.eye), v(d))
 }
 
+/// Per base triangle, the other triangles sharing a vertex position with it (bit-identical
+/// positions, so the two sides of a uv or normal seam are neighbours): where the oracle looks
+/// for a true hit that lies across a base edge.
+fn vertex_neighbours<T: Real>(mesh: &nlrt_accel::BaseMesh<T>) -> Vec<Vec<usize>> {
+    use std::collections::HashMap;
+    let key = |v: u32| to_f64::<T>(mesh.positions()[v as usize]).map(f64::to_bits);
+    let mut by_vertex: HashMap<[u64; 3], Vec<usize>> = HashMap::new();
+    for i in 0..mesh.triangle_count() {
+        for v in mesh.triangle(i) {
+            by_vertex.entry(key(v)).or_default().push(i);
+        }
+    }
+    (0..mesh.triangle_count())
+        .map(|i| {
+            let mut others: Vec<usize> = mesh
+                .triangle(i)
+                .iter()
+                .flat_map(|&v| by_vertex[&key(v)].iter().copied())
+                .filter(|&o| o != i)
+                .collect();
+            others.sort_unstable();
+            others.dedup();
+            others
+        })
+        .collect()
+}
+
 /// The oracle's view of the microtriangles around a hit, exactly as the tracer has them (its
 /// precision's prisms, ray, texel corners and heights).
 struct TrueSurface<'a, T: Real> {
@@ -753,34 +796,9 @@ struct TrueSurface<'a, T: Real> {
 
 impl<'a, T: Real> TrueSurface<'a, T> {
     fn new(surface: &'a nlrt_accel::DisplacedSurface<T>) -> Self {
-        use std::collections::HashMap;
-        let mesh = surface.mesh();
-        let key = |v: u32| {
-            let p = to_f64::<T>(mesh.positions()[v as usize]);
-            p.map(f64::to_bits)
-        };
-        let mut by_vertex: HashMap<[u64; 3], Vec<usize>> = HashMap::new();
-        for i in 0..mesh.triangle_count() {
-            for v in mesh.triangle(i) {
-                by_vertex.entry(key(v)).or_default().push(i);
-            }
-        }
-        let neighbours = (0..mesh.triangle_count())
-            .map(|i| {
-                let mut others: Vec<usize> = mesh
-                    .triangle(i)
-                    .iter()
-                    .flat_map(|&v| by_vertex[&key(v)].iter().copied())
-                    .filter(|&o| o != i)
-                    .collect();
-                others.sort_unstable();
-                others.dedup();
-                others
-            })
-            .collect();
         Self {
             surface,
-            neighbours,
+            neighbours: vertex_neighbours(surface.mesh()),
         }
     }
 

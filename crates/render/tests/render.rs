@@ -231,11 +231,31 @@ fn mountain_at_grazing_angles_is_watertight() {
     }
 }
 
+/// Shell scenes are judged by aimed rays, for nonlinear tracing only: another method is
+/// refused with the reason.
 #[test]
-fn watertight_rejects_shell_scenes_cleanly() {
-    let out = nlrt(&["watertight", "scales", "--rays", "16"]);
+fn watertight_judges_shell_scenes_by_nonlinear_tracing() {
+    let out = nlrt(&["watertight", "scales", "--rays", "64"]);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let table = String::from_utf8_lossy(&out.stdout);
+    assert!(table.contains("| scales | nonlinear f32 | 64 |"), "{table}");
+    assert!(table.contains("| scales | nonlinear f64 | 64 |"), "{table}");
+    assert!(!table.contains("tessellation-free"), "{table}");
+    let out = nlrt(&[
+        "watertight",
+        "scales",
+        "--rays",
+        "16",
+        "--method",
+        "tessellation-free",
+    ]);
     assert_eq!(out.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&out.stderr).contains("displacement scenes"));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("shell-mapped"));
 }
 
 /// Fig. 9's degenerate configurations (uv-degenerate to a line and a point, prisms pinching

@@ -1,0 +1,527 @@
+//! `nlrt watertight` on shell-mapped scenes: rays aimed at points of the mapped object, each
+//! judged by the MPFR oracle.
+//!
+//! A shell-mapped object need not cover the base, so the displacement criterion (a ray that
+//! reaches the base from outside has crossed the surface) does not apply. Each ray is instead
+//! aimed from the camera at a point of the object's surface: a random object triangle in a
+//! random tile over a random base triangle, at a point inside it or on an edge it shares with
+//! exactly one other object triangle (where a floating-point test can let a ray slip between
+//! the two). The oracle ([`true_microtriangle_hit`], 512-bit MPFR on exactly the tracer's
+//! values: its precision's prisms, ray and tiled object triangles) finds where the exact ray
+//! crosses the aimed triangle, or its partner across the edge, in the prism of the aimed
+//! point's base triangle or, failing that, a prism sharing a vertex with it. Where it crosses
+//! at `t*`, the tracer must report a hit no farther than `t* (1 + LEAK_TOLERANCE)`: a miss or a
+//! farther hit is a leak. Where the exact ray meets neither triangle (the rounded direction
+//! passes beside a point near the object's outer boundary), the ray is not decided. No claim
+//! about the base mesh is needed: the verdict is exact per prism, seams included.
+//!
+//! Every reported hit is also judged in the other direction ([`GhostCount`]): confirmed when
+//! the oracle finds the reported object triangle, in the reported prism or one sharing a
+//! vertex with it, within the tolerance of the reported distance; too far when the aimed
+//! crossing is nearer; grazing when the reported point lies on the triangle within the
+//! tolerance; a ghost otherwise.
+
+use super::{
+    DistanceError, GhostCount, HitJudgement, JudgedHits, LEAK_TOLERANCE, LeakEdge, LeakReport,
+    Verdict, shell_point_on_ray, spacing, to_f64, vertex_neighbours,
+};
+use crate::method::Method;
+use crate::scenes::Scene;
+use nlrt_accel::{ShellHit, ShellSurface, TraversalStats};
+use nlrt_oracle::families::SplitMix64;
+use nlrt_oracle::shell::{ShellScene, TrueHit, true_microtriangle_hit};
+use nlrt_poly::glam::DVec3;
+use nlrt_poly::{Real, Vector2, Vector3};
+use nlrt_shellmap::Ray;
+use rayon::prelude::*;
+use std::collections::HashMap;
+
+/// Tries per sample to draw an object point that lies over the drawn base triangle (a tile
+/// overlapping it holds points over its neighbours too). Rejection keeps the points uniform
+/// over the base triangle's part of each tile; 16 tries leave few samples without a point on
+/// the built-in scenes, whose tiles span at most a few base triangles.
+const ATTEMPTS: usize = 16;
+
+/// Aimed points on an edge are kept this far (as a fraction of the edge) from its ends, and
+/// interior points this far (in barycentric weight) from the triangle's edges: a vertex is
+/// shared by a fan of triangles, not only the two the oracle is asked about.
+const MARGIN: f64 = 0.02;
+
+/// Seed of the sample sequence (any fixed value: the samples are the same in every run).
+const SEED: u64 = 0x5e11_1ea4;
+
+/// One aimed point: where, and which object triangles meet there.
+#[derive(Clone, Copy, Debug)]
+struct Target {
+    /// Base triangle whose prism holds the point.
+    base: usize,
+    /// Canonical coordinates of the point in that prism.
+    alpha: f64,
+    beta: f64,
+    /// Tile of the object instance.
+    tile: [i32; 2],
+    /// The aimed object triangle and, for a point on a shared edge, its partner there.
+    triangles: [u32; 2],
+    on_edge: bool,
+    /// The world point (Eq. 1 in f64 on the tracer's prism).
+    world: DVec3,
+}
+
+/// For each object triangle and edge, the other object triangle on that edge when exactly two
+/// share it (bit-identical end points).
+fn edge_partners<T: Real>(triangles: &[[T::Vec3; 3]]) -> Vec<[Option<u32>; 3]> {
+    let key = |p: T::Vec3| [p.x().to_f64(), p.y().to_f64(), p.z().to_f64()].map(f64::to_bits);
+    let mut edges: HashMap<[[u64; 3]; 2], Vec<(u32, usize)>> = HashMap::new();
+    for (k, t) in triangles.iter().enumerate() {
+        for e in 0..3 {
+            let (a, b) = (key(t[e]), key(t[(e + 1) % 3]));
+            let edge = if a < b { [a, b] } else { [b, a] };
+            edges.entry(edge).or_default().push((k as u32, e));
+        }
+    }
+    let mut partners = vec![[None; 3]; triangles.len()];
+    for users in edges.values() {
+        if let [(k0, e0), (k1, e1)] = users[..] {
+            partners[k0 as usize][e0] = Some(k1);
+            partners[k1 as usize][e1] = Some(k0);
+        }
+    }
+    partners
+}
+
+/// Barycentric `(alpha, beta)` of `q` in the uv triangle `uv`, when `q` lies in it (edges
+/// included); `None` outside or for a degenerate triangle.
+fn uv_barycentric(uv: [[f64; 2]; 3], q: [f64; 2]) -> Option<(f64, f64)> {
+    let (e0, e1) = (
+        [uv[1][0] - uv[0][0], uv[1][1] - uv[0][1]],
+        [uv[2][0] - uv[0][0], uv[2][1] - uv[0][1]],
+    );
+    let r = [q[0] - uv[0][0], q[1] - uv[0][1]];
+    let det = e0[0] * e1[1] - e0[1] * e1[0];
+    if det == 0.0 || !det.is_finite() {
+        return None;
+    }
+    let alpha = (r[0] * e1[1] - r[1] * e1[0]) / det;
+    let beta = (e0[0] * r[1] - e0[1] * r[0]) / det;
+    (alpha >= 0.0 && beta >= 0.0 && alpha + beta <= 1.0).then_some((alpha, beta))
+}
+
+/// The `k`-th aimed point (deterministic in `k`), or `None` when no try found an object point
+/// over the drawn base triangle.
+fn target<T: Real>(
+    surface: &ShellSurface<T>,
+    partners: &[[Option<u32>; 3]],
+    k: usize,
+) -> Option<Target> {
+    let mut rng = SplitMix64::new(SEED ^ (k as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15));
+    let bases = surface.mesh().triangle_count();
+    let objects = surface.object().triangles().len();
+    let pick = |rng: &mut SplitMix64, n: usize| (rng.next_u64() % n as u64) as usize;
+    for _ in 0..ATTEMPTS {
+        let base = pick(&mut rng, bases);
+        let prism = surface.prism(base);
+        let uv = prism.uv.map(|t| [t.x().to_f64(), t.y().to_f64()]);
+        // A uniform point of the base triangle's uv triangle chooses the tile.
+        let (r1, r2) = (rng.unit().sqrt(), rng.unit());
+        let w = [1.0 - r1, r1 * (1.0 - r2), r1 * r2];
+        let p = [0, 1].map(|a| w[0] * uv[0][a] + w[1] * uv[1][a] + w[2] * uv[2][a]);
+        if !(p[0].is_finite() && p[1].is_finite()) {
+            return None;
+        }
+        let tile = [p[0].floor() as i32, p[1].floor() as i32];
+        let aimed = pick(&mut rng, objects) as u32;
+        let tri = surface.placed_triangle(aimed, tile)?.map(to_f64::<T>);
+        let edge = pick(&mut rng, 3);
+        let partner = if rng.unit() < 0.5 {
+            partners[aimed as usize][edge]
+        } else {
+            None
+        };
+        let point: [f64; 3] = if partner.is_some() {
+            let s = rng.range(MARGIN, 1.0 - MARGIN);
+            let (a, b) = (tri[edge], tri[(edge + 1) % 3]);
+            [0, 1, 2].map(|i| a[i] + (b[i] - a[i]) * s)
+        } else {
+            let (r1, r2) = (rng.unit().sqrt(), rng.unit());
+            let w = [1.0 - r1, r1 * (1.0 - r2), r1 * r2].map(|x| MARGIN + (1.0 - 3.0 * MARGIN) * x);
+            [0, 1, 2].map(|i| w[0] * tri[0][i] + w[1] * tri[1][i] + w[2] * tri[2][i])
+        };
+        let Some((alpha, beta)) = uv_barycentric(uv, [point[0], point[1]]) else {
+            continue;
+        };
+        let h = point[2];
+        let weights = [1.0 - alpha - beta, alpha, beta];
+        let world = (0..3)
+            .map(|i| {
+                (DVec3::from(to_f64::<T>(prism.p[i])) + DVec3::from(to_f64::<T>(prism.n[i])) * h)
+                    * weights[i]
+            })
+            .sum();
+        return Some(Target {
+            base,
+            alpha,
+            beta,
+            tile,
+            triangles: [aimed, partner.unwrap_or(aimed)],
+            on_edge: partner.is_some(),
+            world,
+        });
+    }
+    None
+}
+
+/// The oracle's view of the placed object triangles, exactly as the tracer has them.
+struct TrueShell<'a, T: Real> {
+    surface: &'a ShellSurface<T>,
+    /// Per base triangle, the other triangles sharing a vertex position with it.
+    neighbours: Vec<Vec<usize>>,
+    /// Per object triangle and edge, the one other object triangle on that edge.
+    partners: Vec<[Option<u32>; 3]>,
+}
+
+impl<T: Real> TrueShell<'_, T> {
+    /// The nearest true hit at `t >= t_min` of `ray` on object triangle `k` of `tile` in the
+    /// prism of base triangle `base`.
+    fn hit_in(
+        &self,
+        ray: &Ray<T>,
+        base: usize,
+        k: u32,
+        tile: [i32; 2],
+        t_min: f64,
+    ) -> Option<TrueHit> {
+        let tri = self.surface.placed_triangle(k, tile)?.map(to_f64::<T>);
+        let prism = self.surface.prism(base);
+        let scene = ShellScene {
+            p: prism.p.map(to_f64::<T>),
+            n: prism.n.map(to_f64::<T>),
+            uv: prism.uv.map(|t| [t.x().to_f64(), t.y().to_f64()]),
+            origin: to_f64::<T>(ray.origin),
+            dir: to_f64::<T>(ray.dir),
+            tri,
+        };
+        // The object lies in [0, 1] in h (the triangle's own range would do, but the oracle's
+        // root of a flat triangle is a 512-bit approximation that may fall a hair outside it).
+        true_microtriangle_hit(&scene, 0.0, 1.0, t_min)
+    }
+
+    /// The nearest true hit on any of `triangles` of `tile` in the prism of `base`, or, where
+    /// there is none, in the prisms sharing a vertex with it.
+    fn hit_around(
+        &self,
+        ray: &Ray<T>,
+        base: usize,
+        triangles: &[u32],
+        tile: [i32; 2],
+        t_min: f64,
+    ) -> Option<TrueHit> {
+        let nearest = |prisms: &mut dyn Iterator<Item = usize>| {
+            prisms
+                .flat_map(|b| {
+                    triangles
+                        .iter()
+                        .filter_map(move |&k| self.hit_in(ray, b, k, tile, t_min))
+                })
+                .min_by(|a, b| a.t.total_cmp(&b.t))
+        };
+        nearest(&mut std::iter::once(base))
+            .or_else(|| nearest(&mut self.neighbours[base].iter().copied()))
+    }
+
+    /// The oracle's verdict on a reported hit, with the true distance when confirmed: the
+    /// reported object triangle, or one sharing an edge with it (a hit on a shared edge is
+    /// truly on either side), within the tolerance of the reported distance.
+    fn judge(
+        &self,
+        ray: &Ray<T>,
+        hit: &ShellHit<T>,
+        aimed: Option<f64>,
+    ) -> (HitJudgement, Option<f64>) {
+        let t = hit.hit.t.to_f64();
+        let k = hit.object_triangle;
+        let mut near = vec![k];
+        near.extend(
+            self.partners
+                .get(k as usize)
+                .into_iter()
+                .flatten()
+                .flatten(),
+        );
+        let truth = self.hit_around(
+            ray,
+            hit.triangle as usize,
+            &near,
+            hit.tile,
+            t * (1.0 - LEAK_TOLERANCE),
+        );
+        if let Some(truth) = truth
+            && truth.t <= t * (1.0 + LEAK_TOLERANCE)
+        {
+            return (HitJudgement::Confirmed, Some(truth.t));
+        }
+        if aimed.is_some_and(|a| a < t * (1.0 - LEAK_TOLERANCE)) {
+            return (HitJudgement::TooFar, None);
+        }
+        if self.on_triangle(ray, hit) {
+            (HitJudgement::Grazing, None)
+        } else {
+            (HitJudgement::Ghost, None)
+        }
+    }
+
+    /// Whether the reported point lies on the reported object triangle within
+    /// [`LEAK_TOLERANCE`]: canonical coordinates in the base triangle, the texture point on the
+    /// triangle's plane and inside it (barycentric weights in its plane), and the shell point
+    /// (Eq. 1) on the ray. In f64 on the tracer's values.
+    fn on_triangle(&self, ray: &Ray<T>, hit: &ShellHit<T>) -> bool {
+        let tol = LEAK_TOLERANCE;
+        let prism = self.surface.prism(hit.triangle as usize);
+        let (a, b, h) = (
+            hit.hit.alpha.to_f64(),
+            hit.hit.beta.to_f64(),
+            hit.hit.h.to_f64(),
+        );
+        if [1.0 - a - b, a, b].iter().any(|&w| w < -tol) {
+            return false;
+        }
+        if !shell_point_on_ray(&prism, ray, a, b, h, hit.hit.t.to_f64()) {
+            return false;
+        }
+        let Some(tri) = self.surface.placed_triangle(hit.object_triangle, hit.tile) else {
+            return false;
+        };
+        let [p0, p1, p2] = tri.map(|p| DVec3::from(to_f64::<T>(p)));
+        let uv = [0, 1, 2].map(|k| {
+            let t = prism.uv[k];
+            [t.x().to_f64(), t.y().to_f64()]
+        });
+        let weights = [1.0 - a - b, a, b];
+        let q = DVec3::new(
+            (0..3).map(|k| uv[k][0] * weights[k]).sum(),
+            (0..3).map(|k| uv[k][1] * weights[k]).sum(),
+            h,
+        );
+        let (e0, e1) = (p1 - p0, p2 - p0);
+        let normal = e0.cross(e1);
+        let area2 = normal.length_squared();
+        if area2 == 0.0 {
+            return false;
+        }
+        // Barycentric weights of q's projection on the plane, and its distance to the plane
+        // relative to the triangle's size.
+        let r = q - p0;
+        let w1 = r.cross(e1).dot(normal) / area2;
+        let w2 = e0.cross(r).dot(normal) / area2;
+        let off_plane = r.dot(normal).abs() / area2.sqrt();
+        let size = e0.length().max(e1.length());
+        w1 >= -tol && w2 >= -tol && w1 + w2 <= 1.0 + tol && off_plane <= tol * size.max(1e-300)
+    }
+}
+
+/// One aimed ray: its target, the ray, the exact crossing and the tracer's hit.
+struct Aimed<T: Real> {
+    target: Target,
+    ray: Ray<T>,
+    truth: Option<f64>,
+    hit: Option<ShellHit<T>>,
+}
+
+/// The nearest base edge of a canonical point (0 `alpha = 0`, 1 `beta = 0`, 2
+/// `alpha + beta = 1`, as [`nlrt_accel::EDGE_VERTICES`]).
+fn nearest_base_edge(alpha: f64, beta: f64) -> u8 {
+    let d = [alpha, beta, 1.0 - alpha - beta];
+    (0..3).min_by(|&i, &j| d[i].total_cmp(&d[j])).unwrap_or(0) as u8
+}
+
+/// `samples` aimed rays on the shell-mapped `scene` traced by `surface` (the nonlinear tracer
+/// in precision `T`), judged as the module says, as one report for `method`.
+pub(super) fn measure<T: Real>(
+    scene: &Scene,
+    surface: &ShellSurface<T>,
+    samples: usize,
+    method: Method,
+    judged_hits: JudgedHits,
+    start: std::time::Instant,
+) -> LeakReport {
+    let truth = TrueShell {
+        surface,
+        neighbours: vertex_neighbours(surface.mesh()),
+        partners: edge_partners::<T>(surface.object().triangles()),
+    };
+    let partners = &truth.partners;
+    let eye = {
+        let e = scene.camera.eye;
+        T::Vec3::new(T::from_f64(e.x), T::from_f64(e.y), T::from_f64(e.z))
+    };
+    let show = std::env::var_os("NLRT_SHOW_LEAKS").is_some();
+    let aimed: Vec<Option<Aimed<T>>> = (0..samples)
+        .into_par_iter()
+        .map(|k| {
+            let target = target(surface, partners, k)?;
+            let d = target.world - DVec3::from(to_f64::<T>(eye));
+            let ray = Ray::<T>::new(
+                eye,
+                T::Vec3::new(T::from_f64(d.x), T::from_f64(d.y), T::from_f64(d.z)),
+            )?;
+            let triangles: &[u32] = if target.on_edge {
+                &target.triangles
+            } else {
+                &target.triangles[..1]
+            };
+            let truth = truth
+                .hit_around(&ray, target.base, triangles, target.tile, 0.0)
+                .map(|h| h.t);
+            let hit = surface.intersect(&ray, T::ZERO, T::INFINITY, &mut TraversalStats::default());
+            Some(Aimed {
+                target,
+                ray,
+                truth,
+                hit,
+            })
+        })
+        .collect();
+    let verdicts: Vec<Verdict> = aimed
+        .iter()
+        .enumerate()
+        .map(|(k, a)| {
+            let Some(Aimed {
+                target,
+                truth: Some(t_true),
+                hit,
+                ..
+            }) = a
+            else {
+                return Verdict::NotDecided;
+            };
+            match hit {
+                Some(h) if h.hit.t.to_f64() <= t_true * (1.0 + LEAK_TOLERANCE) => Verdict::Hit,
+                _ => {
+                    if show {
+                        eprintln!(
+                            "{method} leak at sample {k}: base triangle {} (alpha {}, beta {}), tile {:?}, object triangle{} {:?}, true crossing t = {t_true}, tracer {:?}",
+                            target.base,
+                            target.alpha,
+                            target.beta,
+                            target.tile,
+                            if target.on_edge { "s on a shared edge" } else { "" },
+                            target.triangles,
+                            hit.map(|h| (h.hit.t.to_f64(), h.triangle, h.tile, h.object_triangle))
+                        );
+                        // Whether the walk or the triangle test lost it.
+                        if let Some(a) = a {
+                            let all = surface.intersect_brute_force(&a.ray, T::ZERO, T::INFINITY);
+                            eprintln!(
+                                "  every object triangle of every tile: {:?}",
+                                all.map(|h| (h.hit.t.to_f64(), h.triangle, h.tile, h.object_triangle))
+                            );
+                        }
+                    }
+                    Verdict::Leak(target.base as u32)
+                }
+            }
+        })
+        .collect();
+    let mut leak_edges: Vec<LeakEdge> = Vec::new();
+    for (v, a) in verdicts.iter().zip(&aimed) {
+        let (Verdict::Leak(triangle), Some(a)) = (v, a) else {
+            continue;
+        };
+        let edge = nearest_base_edge(a.target.alpha, a.target.beta);
+        match leak_edges
+            .iter_mut()
+            .find(|e| e.triangle == *triangle && e.edge == edge)
+        {
+            Some(e) => e.leaks += 1,
+            None => leak_edges.push(LeakEdge {
+                triangle: *triangle,
+                edge,
+                seam: false,
+                leaks: 1,
+            }),
+        }
+    }
+    leak_edges.sort_by(|a, b| b.leaks.cmp(&a.leaks).then(a.triangle.cmp(&b.triangle)));
+
+    // Every hit of the aimed rays (or evenly spaced ones) judged in the other direction.
+    let hits: Vec<(usize, &Aimed<T>)> = aimed
+        .iter()
+        .enumerate()
+        .filter_map(|(k, a)| a.as_ref().filter(|a| a.hit.is_some()).map(|a| (k, a)))
+        .collect();
+    let stride = match judged_hits {
+        JudgedHits::Every => 1,
+        JudgedHits::Spaced { ghosts, .. } => spacing(hits.len(), ghosts),
+    };
+    let judged: Vec<(u32, HitJudgement, Option<f64>)> = hits
+        .par_iter()
+        .step_by(stride)
+        .filter_map(|&(k, a)| {
+            let hit = a.hit?;
+            let (verdict, confirmed) = truth.judge(&a.ray, &hit, a.truth);
+            let t = hit.hit.t.to_f64();
+            if show && verdict != HitJudgement::Confirmed {
+                eprintln!(
+                    "{} {verdict:?} at sample {k}: t = {t}, base triangle {}, tile {:?}, object triangle {} (alpha {}, beta {}, h {}); aimed at {:?} in base triangle {}, true crossing {:?}",
+                    T::NAME,
+                    hit.triangle,
+                    hit.tile,
+                    hit.object_triangle,
+                    hit.hit.alpha,
+                    hit.hit.beta,
+                    hit.hit.h,
+                    a.target.triangles,
+                    a.target.base,
+                    a.truth
+                );
+            }
+            let error = confirmed.map(|x| (t - x).abs() / x.abs().max(f64::MIN_POSITIVE));
+            Some((k as u32, verdict, error))
+        })
+        .collect();
+    let count = |j: HitJudgement| judged.iter().filter(|x| x.1 == j).count();
+    let ghosts = GhostCount {
+        hits: judged.len(),
+        ghosts: count(HitJudgement::Ghost),
+        grazing: count(HitJudgement::Grazing),
+        too_far: count(HitJudgement::TooFar),
+        ghost_cells: judged
+            .iter()
+            .filter(|x| x.1 == HitJudgement::Ghost)
+            .map(|x| x.0)
+            .collect(),
+    };
+    let mut errors: Vec<f64> = judged.iter().filter_map(|x| x.2).collect();
+    errors.sort_by(f64::total_cmp);
+    let q = |p: f64| {
+        errors
+            .get(((errors.len().max(1) - 1) as f64 * p).round() as usize)
+            .copied()
+            .unwrap_or(f64::NAN)
+    };
+    let distance_error = DistanceError {
+        samples: judged.len(),
+        unverified: judged.len() - errors.len(),
+        median: q(0.5),
+        p99: q(0.99),
+        max: q(1.0),
+    };
+    let decided = verdicts
+        .iter()
+        .filter(|v| **v != Verdict::NotDecided)
+        .count();
+    let leaks = verdicts
+        .iter()
+        .filter(|v| matches!(v, Verdict::Leak(_)))
+        .count();
+    LeakReport {
+        method,
+        rays: samples,
+        decided,
+        leaks,
+        verdicts,
+        distance_error: Some(distance_error),
+        ghosts: Some(ghosts),
+        seconds: start.elapsed().as_secs_f64(),
+        leak_edges,
+    }
+}
