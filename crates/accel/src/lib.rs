@@ -46,6 +46,7 @@ mod cells;
 mod displacement;
 mod heightfield;
 mod mesh;
+mod object_edges;
 mod pose;
 mod seam;
 mod shell;

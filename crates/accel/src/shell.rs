@@ -8,13 +8,13 @@ use alloc::vec::Vec;
 use core::fmt;
 use nlrt_poly::{Real, Vector3};
 use nlrt_shellmap::{
-    BaseEdges, Hit, NonlinearRay, Prism, Ray, TextureCurve, TexturePlane, facing_unit,
-    intersect_microtriangle, world_normal,
+    BaseEdges, Hit, NonlinearRay, Prism, Ray, TextureCurve, TexturePlane, facing_unit, world_normal,
 };
 
 use crate::bvh::{Aabb, Bvh4};
 use crate::cells::{CURVE_STACK, walk_cells};
 use crate::mesh::{BaseMesh, MeshError};
+use crate::object_edges::ObjectEdges;
 use crate::pose::{PoseUpdate, TlasUpdate};
 use crate::stats::TraversalStats;
 use crate::tlas::{MAX_TEXEL_COORDINATE, PrismTlas, RootNodes, SetupError};
@@ -64,6 +64,8 @@ pub struct ShellObject<T: Real> {
     triangles: Vec<[T::Vec3; 3]>,
     bvh: Bvh4<T>,
     h_range: [T; 2],
+    /// The edges two triangles share, made watertight.
+    edges: ObjectEdges<T>,
     /// Triangles dropped because their three points are collinear (no plane).
     pub dropped_degenerate: usize,
 }
@@ -101,10 +103,12 @@ impl<T: Real> ShellObject<T> {
             .collect();
         let bvh = Bvh4::build(&boxes, 4);
         let b = bvh.bounds();
+        let edges = ObjectEdges::new(&kept);
         Ok(Self {
             triangles: kept,
             bvh,
             h_range: [b.lo[2], b.hi[2]],
+            edges,
             dropped_degenerate: dropped,
         })
     }
@@ -118,7 +122,9 @@ impl<T: Real> ShellObject<T> {
     /// Bytes of triangles and BVH (stored once, whatever the number of tiles).
     #[must_use]
     pub fn memory_bytes(&self) -> usize {
-        self.triangles.len() * core::mem::size_of::<[T::Vec3; 3]>() + self.bvh.memory_bytes()
+        self.triangles.len() * core::mem::size_of::<[T::Vec3; 3]>()
+            + self.bvh.memory_bytes()
+            + self.edges.memory_bytes()
     }
 }
 
@@ -254,15 +260,24 @@ impl<T: Real> ShellSurface<T> {
         &self,
         prism: &Prism<T>,
         ray: &NonlinearRay<T>,
+        base_edges: &BaseEdges<T>,
         k: u32,
         [x, y]: [i32; 2],
         t_min: T,
         t_max: T,
     ) -> Option<Hit<T>> {
         let tri = Self::shifted(&self.object.triangles[k as usize], x, y);
-        let lo = tri[0].z().min(tri[1].z()).min(tri[2].z());
-        let hi = tri[0].z().max(tri[1].z()).max(tri[2].z());
-        intersect_microtriangle(prism, ray, &tri, lo, hi, t_min, t_max)
+        self.object.edges.intersect(
+            k,
+            [x, y],
+            &tri,
+            prism,
+            ray,
+            base_edges,
+            t_min,
+            t_max,
+            |other| self.placed_triangle(other, [x, y]),
+        )
     }
 
     /// The object's BVH in tile `(x, y)` along `curve` (set up once per prism), nearest
@@ -276,6 +291,7 @@ impl<T: Real> ShellSurface<T> {
         tri: usize,
         prism: &Prism<T>,
         curve: &TextureCurve<'_, T>,
+        base_edges: &BaseEdges<T>,
         (x, y): (i32, i32),
         [h_in, h_out]: [T; 2],
         t_min: T,
@@ -325,9 +341,15 @@ impl<T: Real> ShellSurface<T> {
                     let first = node.index[c] as usize;
                     for &k in &order[first..first + node.count[c] as usize] {
                         stats.texel_tests += 1;
-                        if let Some(hit) =
-                            self.intersect_object_triangle(prism, ray, k, [x, y], t_min, *t_max)
-                        {
+                        if let Some(hit) = self.intersect_object_triangle(
+                            prism,
+                            ray,
+                            base_edges,
+                            k,
+                            [x, y],
+                            t_min,
+                            *t_max,
+                        ) {
                             *t_max = hit.t;
                             *best = Some(ShellHit {
                                 hit,
@@ -361,11 +383,12 @@ impl<T: Real> ShellSurface<T> {
         let [h_lo, h_hi] = self.object.h_range;
         let mut best = None;
         let curve = TextureCurve::new(prism, ray);
+        let base_edges = BaseEdges::new(ray);
         walk_cells::<T, CURVE_STACK>(
             self.prisms.roots(tri),
             prism,
             &curve,
-            &BaseEdges::new(ray),
+            &base_edges,
             T::ONE,
             t_min,
             t_max,
@@ -377,6 +400,7 @@ impl<T: Real> ShellSurface<T> {
                     tri,
                     prism,
                     &curve,
+                    &base_edges,
                     (x, y),
                     h,
                     t_min,
@@ -400,14 +424,21 @@ impl<T: Real> ShellSurface<T> {
         t_max: T,
     ) -> Option<ShellHit<T>> {
         let [x0, y0, x1, y1] = self.prisms.roots(tri).texels;
+        let base_edges = BaseEdges::new(ray);
         let mut best = None;
         let mut t_max = t_max;
         for y in y0..=y1 {
             for x in x0..=x1 {
                 for k in 0..self.object.triangles.len() as u32 {
-                    if let Some(hit) =
-                        self.intersect_object_triangle(prism, ray, k, [x, y], t_min, t_max)
-                    {
+                    if let Some(hit) = self.intersect_object_triangle(
+                        prism,
+                        ray,
+                        &base_edges,
+                        k,
+                        [x, y],
+                        t_min,
+                        t_max,
+                    ) {
                         t_max = hit.t;
                         best = Some(ShellHit {
                             hit,

@@ -206,7 +206,8 @@ impl<T: Real> TrueShell<'_, T> {
     }
 
     /// The nearest true hit on any of `triangles` of `tile` in the prism of `base`, or, where
-    /// there is none, in the prisms sharing a vertex with it.
+    /// there is none, in the prisms sharing a vertex with it; with the base triangle whose
+    /// prism holds it.
     fn hit_around(
         &self,
         ray: &Ray<T>,
@@ -214,18 +215,91 @@ impl<T: Real> TrueShell<'_, T> {
         triangles: &[u32],
         tile: [i32; 2],
         t_min: f64,
-    ) -> Option<TrueHit> {
+    ) -> Option<(TrueHit, usize)> {
         let nearest = |prisms: &mut dyn Iterator<Item = usize>| {
             prisms
                 .flat_map(|b| {
                     triangles
                         .iter()
-                        .filter_map(move |&k| self.hit_in(ray, b, k, tile, t_min))
+                        .filter_map(move |&k| self.hit_in(ray, b, k, tile, t_min).map(|h| (h, b)))
                 })
-                .min_by(|a, b| a.t.total_cmp(&b.t))
+                .min_by(|a, b| a.0.t.total_cmp(&b.0.t))
         };
         nearest(&mut std::iter::once(base))
             .or_else(|| nearest(&mut self.neighbours[base].iter().copied()))
+    }
+
+    /// Whether the exact ray crosses object triangle `k` at `hit` (in the prism of `base`)
+    /// along its normal (from the side its winding's normal points to into the other), in
+    /// f64 on the tracer's values (Eq. 13's normal at the true hit).
+    fn along_normal(
+        &self,
+        ray: &Ray<T>,
+        base: usize,
+        k: u32,
+        tile: [i32; 2],
+        hit: &TrueHit,
+    ) -> Option<bool> {
+        use nlrt_poly::glam::DVec2;
+        let tri = self
+            .surface
+            .placed_triangle(k, tile)?
+            .map(|p| DVec3::from(to_f64::<T>(p)));
+        let prism = self.surface.prism(base);
+        let prism = nlrt_shellmap::Prism::<f64>::new(
+            prism.p.map(|p| DVec3::from(to_f64::<T>(p))),
+            prism.n.map(|n| DVec3::from(to_f64::<T>(n))),
+            prism.uv.map(|t| DVec2::new(t.x().to_f64(), t.y().to_f64())),
+        );
+        let plane = nlrt_shellmap::TexturePlane::<f64>::through(&tri)?;
+        let normal = nlrt_shellmap::world_normal(
+            &prism,
+            &plane.canonical(&prism),
+            hit.alpha,
+            hit.beta,
+            hit.h,
+        );
+        // Eq. 13 gives M^-T n up to the factor det M: orient it by det M's sign.
+        let [s0, s1, s2] = [0, 1, 2].map(|i| prism.vertex(i, hit.h));
+        let ns = prism.n[0]
+            + (prism.n[1] - prism.n[0]) * hit.alpha
+            + (prism.n[2] - prism.n[0]) * hit.beta;
+        let det = (s1 - s0).cross(s2 - s0).dot(ns);
+        let d = normal.dot(DVec3::from(to_f64::<T>(ray.dir))) * det;
+        (d != 0.0).then_some(d < 0.0)
+    }
+
+    /// Whether the exact ray only touches the surface at the aimed shared edge: it crosses both
+    /// triangles there, one along its normal and the other against it (in through one and out
+    /// through the other, within rounding of a silhouette edge). Missing such a touch lets
+    /// nothing through; the ray is not decided.
+    fn grazes(&self, ray: &Ray<T>, target: &Target) -> bool {
+        let [k0, k1] = target.triangles;
+        let crossing = |k: u32| {
+            let (hit, base) = self.hit_around(ray, target.base, &[k], target.tile, 0.0)?;
+            self.along_normal(ray, base, k, target.tile, &hit)
+        };
+        let (Some(d0), Some(d1)) = (crossing(k0), crossing(k1)) else {
+            return false;
+        };
+        // Consistent winding runs the shared edge in opposite directions; otherwise one of
+        // the two normals points the other way.
+        let consistent = self.same_winding(target.tile, k0, k1);
+        (d0 == d1) != consistent
+    }
+
+    /// Whether object triangles `a` and `b` run their shared edge in opposite directions.
+    fn same_winding(&self, tile: [i32; 2], a: u32, b: u32) -> bool {
+        let (Some(ta), Some(tb)) = (
+            self.surface.placed_triangle(a, tile),
+            self.surface.placed_triangle(b, tile),
+        ) else {
+            return true;
+        };
+        (0..3).any(|e| {
+            let (p, q) = (ta[e], ta[(e + 1) % 3]);
+            (0..3).any(|f| tb[f] == q && tb[(f + 1) % 3] == p)
+        })
     }
 
     /// The oracle's verdict on a reported hit, with the true distance when confirmed: the
@@ -254,7 +328,7 @@ impl<T: Real> TrueShell<'_, T> {
             hit.tile,
             t * (1.0 - LEAK_TOLERANCE),
         );
-        if let Some(truth) = truth
+        if let Some((truth, _)) = truth
             && truth.t <= t * (1.0 + LEAK_TOLERANCE)
         {
             return (HitJudgement::Confirmed, Some(truth.t));
@@ -312,9 +386,18 @@ impl<T: Real> TrueShell<'_, T> {
         let r = q - p0;
         let w1 = r.cross(e1).dot(normal) / area2;
         let w2 = e0.cross(r).dot(normal) / area2;
+        // Within the tolerance in texture units of the triangle (as the displacement judge
+        // takes heights within it; the tile is 1, so it is far above the rounding of tile
+        // coordinates in f32): the distance to the plane, and to each edge's line where the
+        // projection lies outside it (the weight of the opposite vertex times that vertex's
+        // height over the edge, twice the area over the edge's length).
         let off_plane = r.dot(normal).abs() / area2.sqrt();
-        let size = e0.length().max(e1.length());
-        w1 >= -tol && w2 >= -tol && w1 + w2 <= 1.0 + tol && off_plane <= tol * size.max(1e-300)
+        let weights = [1.0 - w1 - w2, w1, w2];
+        let opposite = [p2 - p1, p0 - p2, p1 - p0];
+        let outside = (0..3)
+            .map(|i| -weights[i] * area2.sqrt() / opposite[i].length().max(f64::MIN_POSITIVE))
+            .fold(f64::NEG_INFINITY, f64::max);
+        outside <= tol && off_plane <= tol
     }
 }
 
@@ -370,7 +453,8 @@ pub(super) fn measure<T: Real>(
             };
             let truth = truth
                 .hit_around(&ray, target.base, triangles, target.tile, 0.0)
-                .map(|h| h.t);
+                .map(|h| h.0.t)
+                .filter(|_| !(target.on_edge && truth.grazes(&ray, &target)));
             let hit = surface.intersect(&ray, T::ZERO, T::INFINITY, &mut TraversalStats::default());
             Some(Aimed {
                 target,

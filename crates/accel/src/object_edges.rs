@@ -1,0 +1,679 @@
+//! Watertight edges between the triangles of a shell-mapped object.
+//!
+//! Each object triangle is intersected on its own: the plane cubic's root gives a point of the
+//! nonlinear ray on the triangle's plane, and an inside test keeps it. Two triangles sharing an
+//! edge compute their points from different cubics, so near the edge one may fall a rounding
+//! outside the first triangle and the other outside the second: the ray slips through (measured
+//! by `nlrt watertight` on the shell scenes). The texel test of displacement mapping closes such
+//! gaps by construction (split lines computed alike by both sides, signs compared at the split
+//! points); this module does the same for an arbitrary mesh of object triangles, where it is
+//! needed:
+//! - An edge shared by exactly two triangles gets a *separating plane*: through the edge and
+//!   along the sum of the two unit normals (oriented alike), the plane that bisects the two
+//!   faces, so the triangles lie on opposite sides of it whatever their dihedral angle. It is
+//!   computed once, and both triangles use the same numbers.
+//! - Fast path: the plain test, with the shared edges' inside tests made exactly antisymmetric
+//!   (each edge function evaluated with its end points in one fixed order), and each such
+//!   decision checked against a first-order bound on the point's error. A point beyond the
+//!   bound on either side of every shared edge is decided as before.
+//! - Otherwise (a point within that bound of a shared edge), the piece search: the ray's curve
+//!   is cut where it crosses the triangle's separating planes (roots of the planes' cubics along
+//!   the curve, the same numbers in both triangles); the plane cubic is solved on the pieces on
+//!   the triangle's side of them; and where the curve passes a separating plane into the
+//!   neighbour's side, the two planes' cubics are compared there, and a hit is reported on the
+//!   edge unless both signs are certainly the same. The surface along the curve is one
+//!   triangle's plane up to the split point and the other's after it, so a sign change lies in
+//!   a piece (found by its solver) or at the split point (found by the comparison), as in
+//!   `DisplacedSurface::intersect_texel`.
+//!
+//! Boundary edges, edges of three or more triangles, and pairs whose separating plane does not
+//! separate them (faces folded onto each other) keep the plain inside test.
+
+use alloc::vec::Vec;
+use nlrt_poly::{
+    Real, Vector2, Vector3, decided_sign, solve_cubic_in, solve_quadratic, solve_quadratic_in,
+};
+use nlrt_shellmap::{
+    BaseEdges, Hit, NonlinearRay, Prism, TexturePlane, alpha_beta_eq11, decidedly_outside_in_f64,
+};
+
+/// No shared edge.
+const NONE: u32 = u32::MAX;
+
+/// An edge shared by exactly two object triangles.
+#[derive(Clone, Copy, Debug)]
+struct SharedEdge<T: Real> {
+    /// The separating plane (unit normal), in the unit tile.
+    plane: TexturePlane<T>,
+    /// The two triangles.
+    triangles: [u32; 2],
+    /// Whether `triangles[0]` lies on the positive side of `plane` (`triangles[1]` on the
+    /// other).
+    first_positive: bool,
+    /// Whether the two run along the edge in opposite directions (consistent winding: their
+    /// planes' normals point to the same side of the surface).
+    same_winding: bool,
+}
+
+/// The shared edges of an object's triangles.
+#[derive(Clone, Debug)]
+pub(crate) struct ObjectEdges<T: Real> {
+    edges: Vec<SharedEdge<T>>,
+    /// Per triangle and edge (edge `e` from vertex `e` to `e + 1`), its index in `edges`, or
+    /// [`NONE`].
+    of_triangle: Vec<[u32; 3]>,
+}
+
+/// A total order on vertices (bit-identical ones equal), fixing each edge's direction.
+fn vertex_less<T: Real>(a: T::Vec3, b: T::Vec3) -> bool {
+    let key = |p: T::Vec3| [p.x(), p.y(), p.z()];
+    let (ka, kb) = (key(a), key(b));
+    for i in 0..3 {
+        if ka[i] < kb[i] {
+            return true;
+        }
+        if ka[i] > kb[i] {
+            return false;
+        }
+    }
+    false
+}
+
+/// The value of `plane` at `p`.
+fn plane_at<T: Real>(plane: &TexturePlane<T>, p: T::Vec3) -> T {
+    plane.normal.dot(p) + plane.k
+}
+
+/// `plane` moved by the whole tile `(x, y)` (both triangles of an edge move it alike).
+fn shifted_plane<T: Real>(plane: &TexturePlane<T>, [x, y]: [i32; 2]) -> TexturePlane<T> {
+    let (nu, nv) = (plane.normal.x(), plane.normal.y());
+    TexturePlane {
+        normal: plane.normal,
+        k: (-nu).mul_add(T::from_i32(x), (-nv).mul_add(T::from_i32(y), plane.k)),
+    }
+}
+
+/// `c0 + c1 h + c2 h^2 (+ c3 h^3)` and its derivative.
+fn value_and_slope<T: Real, const N: usize>(c: &[T; N], h: T) -> (T, T) {
+    let (mut v, mut d) = (T::ZERO, T::ZERO);
+    for &ci in c.iter().rev() {
+        d = d.mul_add(h, v);
+        v = v.mul_add(h, ci);
+    }
+    (v, d)
+}
+
+/// The edge function of `q` against the edge `a -> b` in the projection on axes `(i, j)`,
+/// evaluated with the end points in their fixed order and negated back, so that the two
+/// triangles of an edge get exactly opposite values at the same point.
+fn edge_function<T: Real>(a: T::Vec3, b: T::Vec3, q: T::Vec3, (i, j): (usize, usize)) -> T {
+    let (p, r, sign) = if vertex_less::<T>(b, a) {
+        (b, a, -T::ONE)
+    } else {
+        (a, b, T::ONE)
+    };
+    sign * nlrt_poly::difference_of_products(
+        r.get(i) - p.get(i),
+        q.get(j) - p.get(j),
+        r.get(j) - p.get(j),
+        q.get(i) - p.get(i),
+    )
+}
+
+/// Where a candidate point stands against one edge of its triangle.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum EdgeSide {
+    Inside,
+    Outside,
+    /// Within the error bound of a shared edge: the piece search decides.
+    Unsure,
+}
+
+impl<T: Real> ObjectEdges<T> {
+    /// The shared edges of `triangles` (vertices compared bit for bit).
+    pub(crate) fn new(triangles: &[[T::Vec3; 3]]) -> Self {
+        let mut of_triangle = alloc::vec![[NONE; 3]; triangles.len()];
+        // Every edge, its end points in the fixed order, then sorted so that equal edges meet.
+        let mut all: Vec<([T::Vec3; 2], u32, u8)> = Vec::with_capacity(3 * triangles.len());
+        for (k, t) in triangles.iter().enumerate() {
+            for e in 0..3 {
+                let (a, b) = (t[e], t[(e + 1) % 3]);
+                let ends = if vertex_less::<T>(b, a) {
+                    [b, a]
+                } else {
+                    [a, b]
+                };
+                all.push((ends, k as u32, e as u8));
+            }
+        }
+        let less = |x: &[T::Vec3; 2], y: &[T::Vec3; 2]| {
+            vertex_less::<T>(x[0], y[0]) || (x[0] == y[0] && vertex_less::<T>(x[1], y[1]))
+        };
+        all.sort_unstable_by(|x, y| {
+            if less(&x.0, &y.0) {
+                core::cmp::Ordering::Less
+            } else if less(&y.0, &x.0) {
+                core::cmp::Ordering::Greater
+            } else {
+                (x.1, x.2).cmp(&(y.1, y.2))
+            }
+        });
+        let mut edges = Vec::new();
+        let mut i = 0;
+        while i < all.len() {
+            let mut j = i + 1;
+            while j < all.len() && all[j].0 == all[i].0 {
+                j += 1;
+            }
+            if j == i + 2
+                && let Some(edge) = Self::shared(triangles, all[i], all[i + 1])
+            {
+                let id = edges.len() as u32;
+                of_triangle[all[i].1 as usize][usize::from(all[i].2)] = id;
+                of_triangle[all[i + 1].1 as usize][usize::from(all[i + 1].2)] = id;
+                edges.push(edge);
+            }
+            i = j;
+        }
+        Self { edges, of_triangle }
+    }
+
+    /// The separating plane of an edge two triangles share, or `None` when it does not
+    /// separate them (a degenerate pair, or faces folded onto each other).
+    fn shared(
+        triangles: &[[T::Vec3; 3]],
+        (ends, k0, e0): ([T::Vec3; 2], u32, u8),
+        (_, k1, e1): ([T::Vec3; 2], u32, u8),
+    ) -> Option<SharedEdge<T>> {
+        let (t0, t1) = (&triangles[k0 as usize], &triangles[k1 as usize]);
+        let (n0, n1) = (
+            TexturePlane::<T>::through(t0)?.normal,
+            TexturePlane::<T>::through(t1)?.normal,
+        );
+        // Consistent winding runs the edge in opposite directions.
+        let same_winding = t0[usize::from(e0)] != t1[usize::from(e1)];
+        let m = if same_winding { n0 + n1 } else { n0 - n1 };
+        let [a, b] = ends;
+        let plane = TexturePlane::<T>::through(&[a, b, a + m])?;
+        let third = |t: &[T::Vec3; 3], e: u8| t[(usize::from(e) + 2) % 3];
+        let (s0, s1) = (
+            plane_at(&plane, third(t0, e0)),
+            plane_at(&plane, third(t1, e1)),
+        );
+        // Strictly on opposite sides, each by more than the plane's own rounding (a few ulps
+        // of the tile's unit size: a third vertex that close lies in the plane).
+        let slack = T::from_i32(16) * T::EPSILON;
+        let separated = (s0 > slack && s1 < -slack) || (s0 < -slack && s1 > slack);
+        separated.then_some(SharedEdge {
+            plane,
+            triangles: [k0, k1],
+            first_positive: s0 > T::ZERO,
+            same_winding,
+        })
+    }
+
+    /// Bytes held.
+    pub(crate) fn memory_bytes(&self) -> usize {
+        self.edges.len() * core::mem::size_of::<SharedEdge<T>>()
+            + self.of_triangle.len() * core::mem::size_of::<[u32; 3]>()
+    }
+
+    /// The nearest hit with `t` in `[t_min, t_max]` of `ray` (in `prism`) on object triangle
+    /// `k`, placed in `tile` as `tri` (`placed` gives any triangle of the object in the same
+    /// tile: the neighbours' planes), watertight across its shared edges (see the module).
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn intersect(
+        &self,
+        k: u32,
+        tile: [i32; 2],
+        tri: &[T::Vec3; 3],
+        prism: &Prism<T>,
+        ray: &NonlinearRay<T>,
+        base_edges: &BaseEdges<T>,
+        t_min: T,
+        t_max: T,
+        placed: impl Fn(u32) -> Option<[T::Vec3; 3]>,
+    ) -> Option<Hit<T>> {
+        let plane = TexturePlane::<T>::through(tri)?;
+        let axis = plane.normal.max_abs_axis();
+        let axes = ((axis + 1) % 3, (axis + 2) % 3);
+        // The triangle's orientation in the projection: inside is where every edge function
+        // has this sign.
+        let orientation = edge_function::<T>(tri[0], tri[1], tri[2], axes);
+        if orientation == T::ZERO {
+            return None;
+        }
+        let shared = self
+            .of_triangle
+            .get(k as usize)
+            .copied()
+            .unwrap_or([NONE; 3]);
+        let lo = tri[0].z().min(tri[1].z()).min(tri[2].z());
+        let hi = tri[0].z().max(tri[1].z()).max(tri[2].z());
+        let cubic = plane.ray_cubic(ray);
+        let plane_abh = plane.canonical(prism);
+        // Candidate points: the flat shortcut's (sec. 5.4) or the plane cubic's roots.
+        let mut candidates: [Option<(T, T, T, T)>; 3] = [None; 3]; // (t, alpha, beta, h)
+        if tri[1].z() == lo && tri[2].z() == lo && tri[0].z() == lo {
+            candidates[0] = prism
+                .cross_section_hit(&ray.ray, lo)
+                .map(|(t, alpha, beta)| (t, alpha, beta, lo));
+        } else {
+            for (slot, &h) in
+                solve_cubic_in(cubic, lo - HEIGHT_WINDOW::<T>(), hi + HEIGHT_WINDOW::<T>())
+                    .iter()
+                    .enumerate()
+            {
+                candidates[slot] = alpha_beta_eq11(ray, &plane_abh, h).map(|(alpha, beta)| {
+                    (ray.signed_distance(prism, alpha, beta, h), alpha, beta, h)
+                });
+            }
+        }
+        let mut best: Option<Hit<T>> = None;
+        for &(t, alpha, beta, h) in candidates.iter().flatten() {
+            let uv = prism.texture_uv(alpha, beta);
+            let bound = point_error_bound(&cubic, ray, T::Vec3::new(uv.x(), uv.y(), h), h);
+            let Some((a, b)) = in_base_triangle(prism, ray, base_edges, alpha, beta, h, bound)
+            else {
+                continue;
+            };
+            let t = if (a, b) == (alpha, beta) {
+                t
+            } else {
+                ray.signed_distance(prism, a, b, h)
+            };
+            let (alpha, beta) = (a, b);
+
+            let uv = prism.texture_uv(alpha, beta);
+            let q = T::Vec3::new(uv.x(), uv.y(), h);
+            let bound = point_error_bound(&cubic, ray, q, h);
+            let mut inside = true;
+            for e in 0..3 {
+                let (a, b) = (tri[e], tri[(e + 1) % 3]);
+                let w = edge_function::<T>(a, b, q, axes) * T::ONE.copysign(orientation);
+                let side = if shared[e] == NONE {
+                    if w >= T::ZERO {
+                        EdgeSide::Inside
+                    } else {
+                        EdgeSide::Outside
+                    }
+                } else {
+                    let span = (b.get(axes.0) - a.get(axes.0))
+                        .abs()
+                        .max((b.get(axes.1) - a.get(axes.1)).abs());
+                    let tolerance = T::TWO * span * bound;
+                    if w > tolerance {
+                        EdgeSide::Inside
+                    } else if w < -tolerance {
+                        EdgeSide::Outside
+                    } else {
+                        EdgeSide::Unsure
+                    }
+                };
+                match side {
+                    EdgeSide::Inside => {}
+                    EdgeSide::Outside => inside = false,
+                    EdgeSide::Unsure => {
+                        return self.piece_search(
+                            k,
+                            tile,
+                            tri,
+                            &plane,
+                            &cubic,
+                            prism,
+                            ray,
+                            base_edges,
+                            [lo, hi],
+                            t_min,
+                            t_max,
+                            &placed,
+                        );
+                    }
+                }
+            }
+            if inside && t >= t_min && t <= t_max && best.is_none_or(|b| t < b.t) {
+                best = Some(Hit {
+                    t,
+                    alpha,
+                    beta,
+                    h,
+                    u: q.x(),
+                    v: q.y(),
+                });
+            }
+        }
+        best
+    }
+
+    /// The piece search of the module's description, over the heights `[lo, hi]` widened by
+    /// [`HEIGHT_WINDOW`] (a flat triangle's range is a single height).
+    #[allow(clippy::too_many_arguments)]
+    fn piece_search(
+        &self,
+        k: u32,
+        tile: [i32; 2],
+        tri: &[T::Vec3; 3],
+        plane: &TexturePlane<T>,
+        cubic: &[T; 4],
+        prism: &Prism<T>,
+        ray: &NonlinearRay<T>,
+        base_edges: &BaseEdges<T>,
+        [lo, hi]: [T; 2],
+        t_min: T,
+        t_max: T,
+        placed: &impl Fn(u32) -> Option<[T::Vec3; 3]>,
+    ) -> Option<Hit<T>> {
+        let shared = self
+            .of_triangle
+            .get(k as usize)
+            .copied()
+            .unwrap_or([NONE; 3]);
+        // The curve's poles in the object's heights (the same numbers in every triangle).
+        let poles = solve_quadratic_in(ray.d, T::ZERO, T::ONE);
+        let sides: [Option<Side<T>>; 3] = core::array::from_fn(|e| {
+            let edge = self.edges.get(shared[e] as usize)?;
+            let first = edge.triangles[0] == k;
+            let other = if first {
+                edge.triangles[1]
+            } else {
+                edge.triangles[0]
+            };
+            let neighbour = TexturePlane::<T>::through(&placed(other)?)?.ray_cubic(ray);
+            let neighbour = if edge.same_winding {
+                neighbour
+            } else {
+                neighbour.map(|c| -c)
+            };
+            Some(Side::new(
+                shifted_plane(&edge.plane, tile).ray_cubic(ray),
+                first == edge.first_positive,
+                neighbour,
+                ray,
+                poles.as_slice(),
+            ))
+        });
+        let axis = plane.normal.max_abs_axis();
+        let axes = ((axis + 1) % 3, (axis + 2) % 3);
+        let orientation = T::ONE.copysign(edge_function::<T>(tri[0], tri[1], tri[2], axes));
+        let plane_abh = plane.canonical(prism);
+        let (lo, hi) = (lo - HEIGHT_WINDOW::<T>(), hi + HEIGHT_WINDOW::<T>());
+
+        // Split points in (lo, hi): the separating planes' crossings (tags 0-2) and the poles
+        // (tag 3).
+        let mut splits: [(T, u8); 11] = [(T::ZERO, 0); 11];
+        let mut n = 0;
+        for (e, side) in sides.iter().enumerate() {
+            for &r in side.iter().flat_map(|s| s.crossings()) {
+                if r > lo && r < hi {
+                    splits[n] = (r, e as u8);
+                    n += 1;
+                }
+            }
+        }
+        for &r in poles.iter() {
+            if r > lo && r < hi {
+                splits[n] = (r, 3);
+                n += 1;
+            }
+        }
+        let splits = &mut splits[..n];
+        splits.sort_unstable_by(|a, b| a.0.partial_cmp(&b.0).unwrap_or(core::cmp::Ordering::Equal));
+
+        let mut best: Option<Hit<T>> = None;
+        let mut consider = |h: T| {
+            let Some((alpha, beta)) = alpha_beta_eq11(ray, &plane_abh, h) else {
+                return;
+            };
+            let uv = prism.texture_uv(alpha, beta);
+            let bound = point_error_bound(cubic, ray, T::Vec3::new(uv.x(), uv.y(), h), h);
+            let Some((alpha, beta)) =
+                in_base_triangle(prism, ray, base_edges, alpha, beta, h, bound)
+            else {
+                return;
+            };
+            let uv = prism.texture_uv(alpha, beta);
+            let q = T::Vec3::new(uv.x(), uv.y(), h);
+            // Edges without a separating plane keep the plain test.
+            for e in 0..3 {
+                if sides[e].is_none()
+                    && edge_function::<T>(tri[e], tri[(e + 1) % 3], q, axes) * orientation < T::ZERO
+                {
+                    return;
+                }
+            }
+            let t = ray.signed_distance(prism, alpha, beta, h);
+            if t >= t_min && t <= t_max && best.is_none_or(|b| t < b.t) {
+                best = Some(Hit {
+                    t,
+                    alpha,
+                    beta,
+                    h,
+                    u: q.x(),
+                    v: q.y(),
+                });
+            }
+        };
+        let mut start = lo;
+        let mut previous_ours = false;
+        for i in 0..=splits.len() {
+            let end = splits.get(i).map_or(hi, |s| s.0);
+            let middle = (start + end) * T::HALF;
+            let ours = end > start && sides.iter().flatten().all(|s| s.ours_at(middle));
+            if ours {
+                for &r in solve_cubic_in(*cubic, start, end).iter() {
+                    consider(r.max(start).min(end));
+                }
+            }
+            // The split point that starts this piece: where the curve passes a separating
+            // plane between our side and the neighbour's, compare the two planes there.
+            let split = i.checked_sub(1).map(|j| splits[j]);
+            if let Some((split, e)) = split
+                && (ours || previous_ours)
+                && let Some(Some(side)) = sides.get(usize::from(e))
+            {
+                let own = decided_sign(cubic, split);
+                if !(own.is_some() && own == decided_sign(&side.neighbour, split)) {
+                    consider(split);
+                }
+            }
+            if end > start {
+                previous_ours = ours;
+            }
+            start = end;
+        }
+        best
+    }
+}
+
+/// Heights a piece search extends beyond the triangle's own range: a few ulps of the unit
+/// height, so that a flat triangle's single height becomes an interval holding its plane's
+/// root, and a split point within rounding of the range's end is compared by both triangles.
+#[allow(non_snake_case)]
+fn HEIGHT_WINDOW<T: Real>() -> T {
+    T::from_i32(16) * T::EPSILON
+}
+
+/// A shared edge as the piece search needs it: where the curve crosses its separating plane,
+/// and on which side the curve is between crossings. Both triangles of the edge build it from
+/// the same numbers (the plane's cubic solved on the object's whole height range `[0, 1]`, not
+/// on each triangle's own), so they agree on every side.
+struct Side<T: Real> {
+    /// The separating plane's crossings in `[0, 1]`, increasing, with the poles (where the
+    /// curve's denominator changes sign) among them.
+    splits: [T; 5],
+    /// Whether each crossing is the plane's (not a pole).
+    is_crossing: [bool; 5],
+    count: usize,
+    /// Per stretch between consecutive splits (from 0 to 1), whether the curve lies on this
+    /// triangle's side there.
+    ours: [bool; 6],
+    /// The neighbour's plane cubic, oriented like this triangle's.
+    neighbour: [T; 4],
+}
+
+impl<T: Real> Side<T> {
+    fn new(
+        along: [T; 4],
+        positive: bool,
+        neighbour: [T; 4],
+        ray: &NonlinearRay<T>,
+        poles: &[T],
+    ) -> Self {
+        let mut splits = [T::ZERO; 5];
+        let mut is_crossing = [false; 5];
+        let mut count = 0;
+        for &r in solve_cubic_in(along, T::ZERO, T::ONE).iter() {
+            splits[count] = r;
+            is_crossing[count] = true;
+            count += 1;
+        }
+        for &r in poles {
+            splits[count] = r;
+            count += 1;
+        }
+        // Insertion sort of at most five, carrying the tags.
+        for i in 1..count {
+            let mut j = i;
+            while j > 0 && splits[j - 1] > splits[j] {
+                splits.swap(j - 1, j);
+                is_crossing.swap(j - 1, j);
+                j -= 1;
+            }
+        }
+        let mut ours = [false; 6];
+        for (j, side) in ours.iter_mut().enumerate().take(count + 1) {
+            let a = if j == 0 { T::ZERO } else { splits[j - 1] };
+            let b = if j == count { T::ONE } else { splits[j] };
+            let h = (a + b) * T::HALF;
+            let d = value_and_slope(&ray.d, h).0;
+            let v = value_and_slope(&along, h).0;
+            *side = d != T::ZERO && ((v > T::ZERO) == (d > T::ZERO)) == positive;
+        }
+        Self {
+            splits,
+            is_crossing,
+            count,
+            ours,
+            neighbour,
+        }
+    }
+
+    /// The plane's crossings (poles left out).
+    fn crossings(&self) -> impl Iterator<Item = &T> {
+        self.splits[..self.count]
+            .iter()
+            .zip(&self.is_crossing)
+            .filter(|(_, c)| **c)
+            .map(|(r, _)| r)
+    }
+
+    /// Whether the curve at `h` (not a split point) lies on this triangle's side.
+    fn ours_at(&self, h: T) -> bool {
+        let stretch = self.splits[..self.count].iter().filter(|&&r| r < h).count();
+        self.ours[stretch]
+    }
+}
+
+/// The farthest (in texture units, a tile being 1) a candidate point is moved onto the base
+/// triangle: 2^-12, twice 16 ulps of a texture coordinate in `f32` at tile index 64 (the
+/// largest of the built-in scenes; its ulp is 2^-17), so that points a rounding outside are
+/// kept, while in a prism degenerate in world space (a sphere's pole), where the error bound
+/// of a point grows without limit with the curve's speed in uv, a point a visible fraction of
+/// a tile outside is not pulled onto the wall (a ghost hit in front of the surface).
+#[allow(non_snake_case)]
+fn CLAMP_LIMIT<T: Real>() -> T {
+    T::pow2(-12)
+}
+
+/// `(alpha, beta)` of a candidate point at height `h` when it lies in the base triangle or
+/// across an edge by no more than rounding can put it there: the neighbouring prism computes
+/// the same wall with its own rounding, so a point on the wall may fall a rounding outside in
+/// both, and each keeps it (clamped onto the triangle) unless the edge's function says, beyond
+/// the bound on its own rounding ([`BaseEdges::decidedly_outside`], and for `f32` the same
+/// decision in `f64`, [`decidedly_outside_in_f64`]), that it lies across. `None` otherwise.
+fn in_base_triangle<T: Real>(
+    prism: &Prism<T>,
+    ray: &NonlinearRay<T>,
+    edges: &BaseEdges<T>,
+    alpha: T,
+    beta: T,
+    h: T,
+    tolerance: T,
+) -> Option<(T, T)> {
+    if !(alpha.is_finite() && beta.is_finite()) {
+        return None;
+    }
+    let sum = alpha + beta;
+    if alpha >= T::ZERO && beta >= T::ZERO && sum <= T::ONE {
+        return Some((alpha, beta));
+    }
+    let across = [alpha < T::ZERO, beta < T::ZERO, sum > T::ONE];
+    for (k, &out) in across.iter().enumerate() {
+        if !out {
+            continue;
+        }
+        // Within the error window of a crossing of that edge (the window the texel test
+        // extends its pieces by), and not decidedly across it.
+        let near_crossing = solve_quadratic(edges.edges[k])
+            .iter()
+            .any(|&s| (h - s).abs() <= edges.window(k, s));
+        if !near_crossing
+            || edges.decidedly_outside(k, h)
+            || decidedly_outside_in_f64(prism, &ray.ray, k, h)
+        {
+            return None;
+        }
+    }
+    // Clamped onto the triangle (as the texel test does), moving the texture point by no more
+    // than its error bound: a point farther out is no rounding of a point on the wall (in a
+    // prism degenerate in world space the window of a crossing is wide, but the texture
+    // coordinates still tell how far out the point is).
+    let (a, b) = (alpha.max(T::ZERO), beta.max(T::ZERO));
+    let s = a + b;
+    let (a, b) = if s > T::ONE {
+        let (a, b) = (a / s, b / s);
+        if a + b > T::ONE {
+            (a, T::ONE - a)
+        } else {
+            (a, b)
+        }
+    } else {
+        (a, b)
+    };
+    let (from, to) = (prism.texture_uv(alpha, beta), prism.texture_uv(a, b));
+    let moved = (from.x() - to.x()).abs().max((from.y() - to.y()).abs());
+    (moved <= tolerance.min(CLAMP_LIMIT::<T>())).then_some((a, b))
+}
+
+/// A first-order bound on the error of a candidate point `q` at height `h` on the curve, in
+/// texture units, with a safety factor: the rounding of `q`'s coordinates (a few ulps of their
+/// size) plus the root's error moved along the curve (the Horner bound of the plane cubic over
+/// its slope, times the curve's speed `|du/dh| + |dv/dh|`, from `u = U / D`, `v = V / D`). It
+/// only chooses between the fast path and the piece search, which is exact on either side of
+/// it; the factor 16 keeps the fast path's decisions well clear of the errors it estimates.
+fn point_error_bound<T: Real>(cubic: &[T; 4], ray: &NonlinearRay<T>, q: T::Vec3, h: T) -> T {
+    let eps = T::EPSILON;
+    let size = q.x().abs().max(q.y().abs()).max(h.abs()).max(T::ONE);
+    let (value_scale, slope) = {
+        let abs = cubic.map(T::abs);
+        let (magnitude, _) = value_and_slope(&abs, h.abs());
+        (
+            T::from_i32(6) * eps * magnitude,
+            value_and_slope(cubic, h).1,
+        )
+    };
+    let root_error = if slope == T::ZERO {
+        T::INFINITY
+    } else {
+        value_scale / slope.abs() + eps * h.abs()
+    };
+    let (d, d_slope) = value_and_slope(&ray.d, h);
+    let speed = if d == T::ZERO {
+        T::INFINITY
+    } else {
+        let (_, u_slope) = value_and_slope(&ray.u, h);
+        let (_, v_slope) = value_and_slope(&ray.v, h);
+        ((u_slope - q.x() * d_slope).abs() + (v_slope - q.y() * d_slope).abs()) / d.abs() + T::ONE
+    };
+    T::from_i32(16) * (eps * size + speed * root_error)
+}
