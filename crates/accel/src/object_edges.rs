@@ -62,6 +62,8 @@ pub(crate) struct ObjectEdges<T: Real> {
     /// Per triangle and edge (edge `e` from vertex `e` to `e + 1`), its index in `edges`, or
     /// [`NONE`].
     of_triangle: Vec<[u32; 3]>,
+    /// Per triangle, bit `e` set where edge `e` runs against the fixed vertex order.
+    reversed: Vec<u8>,
 }
 
 /// A total order on vertices (bit-identical ones equal), fixing each edge's direction.
@@ -104,20 +106,24 @@ fn value_and_slope<T: Real, const N: usize>(c: &[T; N], h: T) -> (T, T) {
 }
 
 /// The edge function of `q` against the edge `a -> b` in the projection on axes `(i, j)`,
-/// evaluated with the end points in their fixed order and negated back, so that the two
-/// triangles of an edge get exactly opposite values at the same point.
-fn edge_function<T: Real>(a: T::Vec3, b: T::Vec3, q: T::Vec3, (i, j): (usize, usize)) -> T {
-    let (p, r, sign) = if vertex_less::<T>(b, a) {
-        (b, a, -T::ONE)
-    } else {
-        (a, b, T::ONE)
-    };
-    sign * nlrt_poly::difference_of_products(
+/// evaluated with the end points in their fixed order (`reversed`: `b` comes first, see
+/// [`vertex_less`]) and negated back, so that the two triangles of an edge get exactly
+/// opposite values at the same point.
+fn edge_function<T: Real>(
+    a: T::Vec3,
+    b: T::Vec3,
+    reversed: bool,
+    q: T::Vec3,
+    (i, j): (usize, usize),
+) -> T {
+    let (p, r) = if reversed { (b, a) } else { (a, b) };
+    let w = nlrt_poly::difference_of_products(
         r.get(i) - p.get(i),
         q.get(j) - p.get(j),
         r.get(j) - p.get(j),
         q.get(i) - p.get(i),
-    )
+    );
+    if reversed { -w } else { w }
 }
 
 /// Where a candidate point stands against one edge of its triangle.
@@ -133,6 +139,14 @@ impl<T: Real> ObjectEdges<T> {
     /// The shared edges of `triangles` (vertices compared bit for bit).
     pub(crate) fn new(triangles: &[[T::Vec3; 3]]) -> Self {
         let mut of_triangle = alloc::vec![[NONE; 3]; triangles.len()];
+        let reversed = triangles
+            .iter()
+            .map(|t| {
+                (0..3).fold(0u8, |bits, e| {
+                    bits | (u8::from(vertex_less::<T>(t[(e + 1) % 3], t[e])) << e)
+                })
+            })
+            .collect();
         // Every edge, its end points in the fixed order, then sorted so that equal edges meet.
         let mut all: Vec<([T::Vec3; 2], u32, u8)> = Vec::with_capacity(3 * triangles.len());
         for (k, t) in triangles.iter().enumerate() {
@@ -175,7 +189,11 @@ impl<T: Real> ObjectEdges<T> {
             }
             i = j;
         }
-        Self { edges, of_triangle }
+        Self {
+            edges,
+            of_triangle,
+            reversed,
+        }
     }
 
     /// The separating plane of an edge two triangles share, or `None` when it does not
@@ -216,6 +234,7 @@ impl<T: Real> ObjectEdges<T> {
     pub(crate) fn memory_bytes(&self) -> usize {
         self.edges.len() * core::mem::size_of::<SharedEdge<T>>()
             + self.of_triangle.len() * core::mem::size_of::<[u32; 3]>()
+            + self.reversed.len()
     }
 
     /// The nearest hit with `t` in `[t_min, t_max]` of `ray` (in `prism`) on object triangle
@@ -237,60 +256,61 @@ impl<T: Real> ObjectEdges<T> {
         let plane = TexturePlane::<T>::through(tri)?;
         let axis = plane.normal.max_abs_axis();
         let axes = ((axis + 1) % 3, (axis + 2) % 3);
-        // The triangle's orientation in the projection: inside is where every edge function
-        // has this sign.
-        let orientation = edge_function::<T>(tri[0], tri[1], tri[2], axes);
-        if orientation == T::ZERO {
-            return None;
-        }
+        // The triangle's orientation in the projection (the sign of its 2D area there, the
+        // normal's component on the dropped axis): inside is where every edge function has it.
+        let orientation = T::ONE.copysign(plane.normal.get(axis));
         let shared = self
             .of_triangle
             .get(k as usize)
             .copied()
             .unwrap_or([NONE; 3]);
+        let reversed = self.reversed.get(k as usize).copied().unwrap_or(0);
         let lo = tri[0].z().min(tri[1].z()).min(tri[2].z());
         let hi = tri[0].z().max(tri[1].z()).max(tri[2].z());
         let cubic = plane.ray_cubic(ray);
         let plane_abh = plane.canonical(prism);
-        // Candidate points: the flat shortcut's (sec. 5.4) or the plane cubic's roots.
-        let mut candidates: [Option<(T, T, T, T)>; 3] = [None; 3]; // (t, alpha, beta, h)
+        // Candidate points (alpha, beta, h, and the distance where the flat shortcut of sec.
+        // 5.4 gives it): the shortcut's or the plane cubic's roots (a window beyond the
+        // triangle's heights, where a root on an edge at its lowest or highest point may fall).
+        let mut candidates: [Option<(T, T, T, Option<T>)>; 3] = [None; 3];
         if tri[1].z() == lo && tri[2].z() == lo && tri[0].z() == lo {
             candidates[0] = prism
                 .cross_section_hit(&ray.ray, lo)
-                .map(|(t, alpha, beta)| (t, alpha, beta, lo));
+                .map(|(t, alpha, beta)| (alpha, beta, lo, Some(t)));
         } else {
             for (slot, &h) in
                 solve_cubic_in(cubic, lo - HEIGHT_WINDOW::<T>(), hi + HEIGHT_WINDOW::<T>())
                     .iter()
                     .enumerate()
             {
-                candidates[slot] = alpha_beta_eq11(ray, &plane_abh, h).map(|(alpha, beta)| {
-                    (ray.signed_distance(prism, alpha, beta, h), alpha, beta, h)
-                });
+                candidates[slot] =
+                    alpha_beta_eq11(ray, &plane_abh, h).map(|(alpha, beta)| (alpha, beta, h, None));
             }
         }
         let mut best: Option<Hit<T>> = None;
-        for &(t, alpha, beta, h) in candidates.iter().flatten() {
-            let uv = prism.texture_uv(alpha, beta);
-            let bound = point_error_bound(&cubic, ray, T::Vec3::new(uv.x(), uv.y(), h), h);
-            let Some((a, b)) = in_base_triangle(prism, ray, base_edges, alpha, beta, h, bound)
-            else {
+        for &(alpha, beta, h, flat_t) in candidates.iter().flatten() {
+            let in_prism = alpha >= T::ZERO && beta >= T::ZERO && alpha + beta <= T::ONE;
+            if !in_prism && !(alpha.is_finite() && beta.is_finite()) {
                 continue;
-            };
-            let t = if (a, b) == (alpha, beta) {
-                t
-            } else {
-                ray.signed_distance(prism, a, b, h)
-            };
-            let (alpha, beta) = (a, b);
-
+            }
             let uv = prism.texture_uv(alpha, beta);
             let q = T::Vec3::new(uv.x(), uv.y(), h);
             let bound = point_error_bound(&cubic, ray, q, h);
+            let (alpha, beta, q, flat_t) = if in_prism {
+                (alpha, beta, q, flat_t)
+            } else {
+                let Some((a, b)) =
+                    onto_base_triangle(prism, ray, base_edges, alpha, beta, h, bound)
+                else {
+                    continue;
+                };
+                let uv = prism.texture_uv(a, b);
+                (a, b, T::Vec3::new(uv.x(), uv.y(), h), None)
+            };
             let mut inside = true;
             for e in 0..3 {
                 let (a, b) = (tri[e], tri[(e + 1) % 3]);
-                let w = edge_function::<T>(a, b, q, axes) * T::ONE.copysign(orientation);
+                let w = edge_function::<T>(a, b, reversed & (1 << e) != 0, q, axes) * orientation;
                 let side = if shared[e] == NONE {
                     if w >= T::ZERO {
                         EdgeSide::Inside
@@ -331,7 +351,11 @@ impl<T: Real> ObjectEdges<T> {
                     }
                 }
             }
-            if inside && t >= t_min && t <= t_max && best.is_none_or(|b| t < b.t) {
+            if !inside {
+                continue;
+            }
+            let t = flat_t.unwrap_or_else(|| ray.signed_distance(prism, alpha, beta, h));
+            if t >= t_min && t <= t_max && best.is_none_or(|b| t < b.t) {
                 best = Some(Hit {
                     t,
                     alpha,
@@ -348,6 +372,8 @@ impl<T: Real> ObjectEdges<T> {
     /// The piece search of the module's description, over the heights `[lo, hi]` widened by
     /// [`HEIGHT_WINDOW`] (a flat triangle's range is a single height).
     #[allow(clippy::too_many_arguments)]
+    #[cold]
+    #[inline(never)]
     fn piece_search(
         &self,
         k: u32,
@@ -394,7 +420,8 @@ impl<T: Real> ObjectEdges<T> {
         });
         let axis = plane.normal.max_abs_axis();
         let axes = ((axis + 1) % 3, (axis + 2) % 3);
-        let orientation = T::ONE.copysign(edge_function::<T>(tri[0], tri[1], tri[2], axes));
+        let orientation = T::ONE.copysign(plane.normal.get(axis));
+        let reversed = self.reversed.get(k as usize).copied().unwrap_or(0);
         let plane_abh = plane.canonical(prism);
         let (lo, hi) = (lo - HEIGHT_WINDOW::<T>(), hi + HEIGHT_WINDOW::<T>());
 
@@ -424,19 +451,30 @@ impl<T: Real> ObjectEdges<T> {
             let Some((alpha, beta)) = alpha_beta_eq11(ray, &plane_abh, h) else {
                 return;
             };
-            let uv = prism.texture_uv(alpha, beta);
-            let bound = point_error_bound(cubic, ray, T::Vec3::new(uv.x(), uv.y(), h), h);
-            let Some((alpha, beta)) =
-                in_base_triangle(prism, ray, base_edges, alpha, beta, h, bound)
-            else {
-                return;
+            let (alpha, beta) = if alpha >= T::ZERO && beta >= T::ZERO && alpha + beta <= T::ONE {
+                (alpha, beta)
+            } else {
+                let uv = prism.texture_uv(alpha, beta);
+                let bound = point_error_bound(cubic, ray, T::Vec3::new(uv.x(), uv.y(), h), h);
+                let Some(ab) = onto_base_triangle(prism, ray, base_edges, alpha, beta, h, bound)
+                else {
+                    return;
+                };
+                ab
             };
             let uv = prism.texture_uv(alpha, beta);
             let q = T::Vec3::new(uv.x(), uv.y(), h);
             // Edges without a separating plane keep the plain test.
             for e in 0..3 {
                 if sides[e].is_none()
-                    && edge_function::<T>(tri[e], tri[(e + 1) % 3], q, axes) * orientation < T::ZERO
+                    && edge_function::<T>(
+                        tri[e],
+                        tri[(e + 1) % 3],
+                        reversed & (1 << e) != 0,
+                        q,
+                        axes,
+                    ) * orientation
+                        < T::ZERO
                 {
                     return;
                 }
@@ -585,13 +623,17 @@ fn CLAMP_LIMIT<T: Real>() -> T {
     T::pow2(-12)
 }
 
-/// `(alpha, beta)` of a candidate point at height `h` when it lies in the base triangle or
-/// across an edge by no more than rounding can put it there: the neighbouring prism computes
-/// the same wall with its own rounding, so a point on the wall may fall a rounding outside in
-/// both, and each keeps it (clamped onto the triangle) unless the edge's function says, beyond
-/// the bound on its own rounding ([`BaseEdges::decidedly_outside`], and for `f32` the same
-/// decision in `f64`, [`decidedly_outside_in_f64`]), that it lies across. `None` otherwise.
-fn in_base_triangle<T: Real>(
+/// `(alpha, beta)` of a candidate point at height `h` outside the base triangle, moved onto it,
+/// when it lies across an edge by no more than rounding can put it there: the neighbouring
+/// prism computes the same wall with its own rounding, so a point on the wall may fall a
+/// rounding outside in both, and each keeps it unless it is farther out than its error bound
+/// `tolerance` (texture units), away from every crossing of that edge by more than the
+/// crossing's error window, or decidedly across the edge by the bound on the edge function's
+/// own rounding ([`BaseEdges::decidedly_outside`], and for `f32` the same decision in `f64`,
+/// [`decidedly_outside_in_f64`]). `None` otherwise.
+#[cold]
+#[inline(never)]
+fn onto_base_triangle<T: Real>(
     prism: &Prism<T>,
     ray: &NonlinearRay<T>,
     edges: &BaseEdges<T>,
@@ -603,11 +645,29 @@ fn in_base_triangle<T: Real>(
     if !(alpha.is_finite() && beta.is_finite()) {
         return None;
     }
-    let sum = alpha + beta;
-    if alpha >= T::ZERO && beta >= T::ZERO && sum <= T::ONE {
-        return Some((alpha, beta));
+    // Clamped onto the triangle (as the texel test does), moving the texture point by no more
+    // than its error bound: a point farther out is no rounding of a point on the wall (in a
+    // prism degenerate in world space the window of a crossing is wide, but the texture
+    // coordinates still tell how far out the point is). Most candidates outside are far
+    // outside (an object triangle crosses into the neighbouring prism), so this goes first.
+    let (a, b) = (alpha.max(T::ZERO), beta.max(T::ZERO));
+    let s = a + b;
+    let (a, b) = if s > T::ONE {
+        let (a, b) = (a / s, b / s);
+        if a + b > T::ONE {
+            (a, T::ONE - a)
+        } else {
+            (a, b)
+        }
+    } else {
+        (a, b)
+    };
+    let (from, to) = (prism.texture_uv(alpha, beta), prism.texture_uv(a, b));
+    let moved = (from.x() - to.x()).abs().max((from.y() - to.y()).abs());
+    if !(moved <= tolerance.min(CLAMP_LIMIT::<T>())) {
+        return None;
     }
-    let across = [alpha < T::ZERO, beta < T::ZERO, sum > T::ONE];
+    let across = [alpha < T::ZERO, beta < T::ZERO, alpha + beta > T::ONE];
     for (k, &out) in across.iter().enumerate() {
         if !out {
             continue;
@@ -624,25 +684,7 @@ fn in_base_triangle<T: Real>(
             return None;
         }
     }
-    // Clamped onto the triangle (as the texel test does), moving the texture point by no more
-    // than its error bound: a point farther out is no rounding of a point on the wall (in a
-    // prism degenerate in world space the window of a crossing is wide, but the texture
-    // coordinates still tell how far out the point is).
-    let (a, b) = (alpha.max(T::ZERO), beta.max(T::ZERO));
-    let s = a + b;
-    let (a, b) = if s > T::ONE {
-        let (a, b) = (a / s, b / s);
-        if a + b > T::ONE {
-            (a, T::ONE - a)
-        } else {
-            (a, b)
-        }
-    } else {
-        (a, b)
-    };
-    let (from, to) = (prism.texture_uv(alpha, beta), prism.texture_uv(a, b));
-    let moved = (from.x() - to.x()).abs().max((from.y() - to.y()).abs());
-    (moved <= tolerance.min(CLAMP_LIMIT::<T>())).then_some((a, b))
+    Some((a, b))
 }
 
 /// A first-order bound on the error of a candidate point `q` at height `h` on the curve, in
@@ -654,26 +696,20 @@ fn in_base_triangle<T: Real>(
 fn point_error_bound<T: Real>(cubic: &[T; 4], ray: &NonlinearRay<T>, q: T::Vec3, h: T) -> T {
     let eps = T::EPSILON;
     let size = q.x().abs().max(q.y().abs()).max(h.abs()).max(T::ONE);
-    let (value_scale, slope) = {
-        let abs = cubic.map(T::abs);
-        let (magnitude, _) = value_and_slope(&abs, h.abs());
-        (
-            T::from_i32(6) * eps * magnitude,
-            value_and_slope(cubic, h).1,
-        )
-    };
-    let root_error = if slope == T::ZERO {
-        T::INFINITY
-    } else {
-        value_scale / slope.abs() + eps * h.abs()
-    };
+    let magnitude = value_and_slope(&cubic.map(T::abs), h.abs()).0;
+    let slope = value_and_slope(cubic, h).1.abs();
     let (d, d_slope) = value_and_slope(&ray.d, h);
-    let speed = if d == T::ZERO {
-        T::INFINITY
+    let u_slope = value_and_slope(&ray.u, h).1;
+    let v_slope = value_and_slope(&ray.v, h).1;
+    // speed = A / |D| + 1 and root error = (6 eps magnitude + eps |h| slope) / slope, as one
+    // quotient (infinite where the curve or the cubic is stationary).
+    let a = (u_slope - q.x() * d_slope).abs() + (v_slope - q.y() * d_slope).abs();
+    let root = T::from_i32(6) * eps * magnitude + eps * h.abs() * slope;
+    let denominator = d.abs() * slope;
+    let moved = if denominator > T::ZERO {
+        (a + d.abs()) * root / denominator
     } else {
-        let (_, u_slope) = value_and_slope(&ray.u, h);
-        let (_, v_slope) = value_and_slope(&ray.v, h);
-        ((u_slope - q.x() * d_slope).abs() + (v_slope - q.y() * d_slope).abs()) / d.abs() + T::ONE
+        T::INFINITY
     };
-    T::from_i32(16) * (eps * size + speed * root_error)
+    T::from_i32(16) * (eps * size + moved)
 }
