@@ -609,3 +609,91 @@ pub(super) fn measure<T: Real>(
         leak_edges,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scenes::{Size, builtin};
+    use crate::tracers::Nonlinear;
+
+    /// The judge confirms the tracer's hits on aimed rays, and calls the same hits moved 1%
+    /// nearer ghosts and 1% farther too far.
+    #[test]
+    fn the_oracle_judges_moved_shell_hits() {
+        let scene = builtin("highpoly", Size::Small).expect("built-in");
+        let Nonlinear::Shell(surface) = Nonlinear::<f64>::new(&scene) else {
+            unreachable!("shell scene")
+        };
+        let truth = TrueShell {
+            surface: &surface,
+            neighbours: vertex_neighbours(surface.mesh()),
+            partners: edge_partners::<f64>(surface.object().triangles()),
+        };
+        let eye = DVec3::from(scene.camera.eye);
+        let mut judged = 0;
+        for k in 0..64 {
+            let Some(target) = target(&surface, &truth.partners, k) else {
+                continue;
+            };
+            let Some(ray) = Ray::<f64>::new(eye, target.world - eye) else {
+                continue;
+            };
+            let Some(hit) =
+                surface.intersect(&ray, 0.0, f64::INFINITY, &mut TraversalStats::default())
+            else {
+                continue;
+            };
+            assert_eq!(
+                truth.judge(&ray, &hit, None).0,
+                HitJudgement::Confirmed,
+                "{hit:?}"
+            );
+            let moved = |factor: f64| {
+                let mut h = hit;
+                h.hit.t *= factor;
+                h
+            };
+            assert_eq!(truth.judge(&ray, &moved(0.99), None).0, HitJudgement::Ghost);
+            assert_eq!(
+                truth.judge(&ray, &moved(1.01), Some(hit.hit.t)).0,
+                HitJudgement::TooFar
+            );
+            judged += 1;
+        }
+        assert!(judged > 40, "{judged}");
+    }
+
+    /// Rays aimed at the objects of the shell scenes (half of them at edges two object
+    /// triangles share) are not let through, in either precision: 1,024 rays per scene and
+    /// precision, every one the oracle decides (before the object triangles' shared edges were
+    /// made watertight, 1.2-1.5% of them leaked in both precisions on the high-polygon blob and
+    /// the scales). The sphere of `cornell` is left out: its pole prisms, degenerate in world
+    /// space, let a few rays through at the walk (docs/watertightness.md).
+    #[test]
+    fn aimed_rays_do_not_leak_through_shell_objects() {
+        for name in ["highpoly", "scales", "feathers"] {
+            let scene = builtin(name, Size::Small).expect("built-in");
+            let reports = super::super::measure_all(
+                &scene,
+                32,
+                &[Method::NonlinearF32, Method::NonlinearF64],
+                JudgedHits::Spaced {
+                    ghosts: 256,
+                    distances: 0,
+                },
+            )
+            .expect("a shell scene is judged");
+            for r in reports {
+                assert!(
+                    r.decided > 900,
+                    "{name} {}: {} decided",
+                    r.method,
+                    r.decided
+                );
+                assert_eq!(r.leaks, 0, "{name} {}: {:?}", r.method, r.leak_edges);
+                let ghosts = r.ghosts.expect("judged");
+                assert_eq!(ghosts.ghosts, 0, "{name} {}: {ghosts:?}", r.method);
+            }
+        }
+    }
+}
