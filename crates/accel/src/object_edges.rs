@@ -126,6 +126,10 @@ fn edge_function<T: Real>(
     if reversed { -w } else { w }
 }
 
+/// A candidate point of the plain test: `alpha`, `beta`, `h`, and the distance where the flat
+/// shortcut gives it.
+type Candidate<T> = (T, T, T, Option<T>);
+
 /// Where a candidate point stands against one edge of its triangle.
 #[derive(Clone, Copy, PartialEq, Eq)]
 enum EdgeSide {
@@ -272,7 +276,7 @@ impl<T: Real> ObjectEdges<T> {
         // Candidate points (alpha, beta, h, and the distance where the flat shortcut of sec.
         // 5.4 gives it): the shortcut's or the plane cubic's roots (a window beyond the
         // triangle's heights, where a root on an edge at its lowest or highest point may fall).
-        let mut candidates: [Option<(T, T, T, Option<T>)>; 3] = [None; 3];
+        let mut candidates: [Option<Candidate<T>>; 3] = [None; 3];
         if tri[1].z() == lo && tri[2].z() == lo && tri[0].z() == lo {
             candidates[0] = prism
                 .cross_section_hit(&ray.ray, lo)
@@ -290,7 +294,7 @@ impl<T: Real> ObjectEdges<T> {
         let mut best: Option<Hit<T>> = None;
         for &(alpha, beta, h, flat_t) in candidates.iter().flatten() {
             let in_prism = alpha >= T::ZERO && beta >= T::ZERO && alpha + beta <= T::ONE;
-            if !in_prism && !(alpha.is_finite() && beta.is_finite()) {
+            if !(in_prism || (alpha.is_finite() && beta.is_finite())) {
                 continue;
             }
             let uv = prism.texture_uv(alpha, beta);

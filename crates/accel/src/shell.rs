@@ -256,6 +256,7 @@ impl<T: Real> ShellSurface<T> {
 
     /// Nearest hit on object triangle `k` placed in tile `(x, y)`.
     #[inline]
+    #[allow(clippy::too_many_arguments)]
     fn intersect_object_triangle(
         &self,
         prism: &Prism<T>,

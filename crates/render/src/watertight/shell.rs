@@ -629,7 +629,7 @@ mod tests {
             neighbours: vertex_neighbours(surface.mesh()),
             partners: edge_partners::<f64>(surface.object().triangles()),
         };
-        let eye = DVec3::from(scene.camera.eye);
+        let eye = scene.camera.eye;
         let mut judged = 0;
         for k in 0..64 {
             let Some(target) = target(&surface, &truth.partners, k) else {
