@@ -364,7 +364,8 @@ impl<T: Real> ObjectEdges<T> {
                     t,
                     alpha,
                     beta,
-                    h,
+                    // A root in the window beyond the triangle's heights is reported on them.
+                    h: h.max(lo).min(hi),
                     u: q.x(),
                     v: q.y(),
                 });
@@ -427,6 +428,7 @@ impl<T: Real> ObjectEdges<T> {
         let orientation = T::ONE.copysign(plane.normal.get(axis));
         let reversed = self.reversed.get(k as usize).copied().unwrap_or(0);
         let plane_abh = plane.canonical(prism);
+        let heights = [lo, hi];
         let (lo, hi) = (lo - HEIGHT_WINDOW::<T>(), hi + HEIGHT_WINDOW::<T>());
 
         // Split points in (lo, hi): the separating planes' crossings (tags 0-2) and the poles
@@ -489,7 +491,7 @@ impl<T: Real> ObjectEdges<T> {
                     t,
                     alpha,
                     beta,
-                    h,
+                    h: h.max(heights[0]).min(heights[1]),
                     u: q.x(),
                     v: q.y(),
                 });
