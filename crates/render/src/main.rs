@@ -220,15 +220,18 @@ enum Command {
         solver_samples: usize,
     },
     /// Leaks, decided by exact arithmetic: rays that reach a base triangle from outside (so
-    /// must have hit the displaced surface) but were not hit; and ghost hits of nonlinear
-    /// tracing: hits in front of the true surface, judged by the MPFR oracle.
+    /// must have hit the displaced surface) but were not hit, or, on shell scenes, rays aimed
+    /// at the object that pass its exact crossing; and ghost hits of nonlinear tracing: hits
+    /// in front of the true surface, judged by the MPFR oracle.
     Watertight {
         /// Displacement scene: torus, fur, mountain, mountain-grazing, fig9-displaced, the
         /// ghost-hit tori torus-spikes, torus-tilted, torus-twisted, the uv-seam scenes
         /// seam-cube, seam-sphere (or cylinder, whose open ends make only part of its rays
-        /// decidable), or a scene file (`*.toml`) with a height map.
+        /// decidable); shell scene: scales, feathers, cornell, highpoly, fig9 (nonlinear
+        /// tracing only); or a scene file (`*.toml`).
         scene: String,
-        /// Rays: a square grid of camera rays with at least this many.
+        /// Rays: a square grid of camera rays with at least this many (on shell scenes, rays
+        /// aimed at the object).
         #[arg(long, default_value_t = 65_536, value_parser = clap::value_parser!(u64).range(1..=100_000_000))]
         rays: u64,
         /// Precision (default: both).
