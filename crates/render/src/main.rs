@@ -376,6 +376,7 @@ fn judged_scene_names() -> Vec<&'static str> {
         .chain(scenes::GHOST_SCENES.iter())
         .chain(scenes::SEAM_SCENES.iter())
         .chain(["fur-hair", "cylinder"].iter())
+        .chain(["scales", "feathers", "cornell", "highpoly", "fig9"].iter())
     {
         if !names.contains(name) {
             names.push(name);
