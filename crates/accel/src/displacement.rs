@@ -483,20 +483,7 @@ impl<T: Real> DisplacedSurface<T> {
             }
             // The pieces decide inside-ness; Eq. 11 may put a point on an edge a rounding
             // error outside, so clamp it onto the base triangle.
-            let (alpha, beta) = (alpha.max(T::ZERO), beta.max(T::ZERO));
-            let sum = alpha + beta;
-            let (alpha, beta) = if sum > T::ONE {
-                // The quotients may still sum to 1 + 1 ulp; `1 - alpha` then makes the sum
-                // round to at most 1 (it is within half an ulp of `beta` of 1).
-                let (alpha, beta) = (alpha / sum, beta / sum);
-                if alpha + beta > T::ONE {
-                    (alpha, T::ONE - alpha)
-                } else {
-                    (alpha, beta)
-                }
-            } else {
-                (alpha, beta)
-            };
+            let (alpha, beta) = nlrt_shellmap::onto_base_triangle(alpha, beta);
             let t = ray.signed_distance(prism, alpha, beta, h);
             if t >= t_min && t <= *t_max {
                 *t_max = t;

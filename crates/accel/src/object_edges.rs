@@ -303,8 +303,7 @@ impl<T: Real> ObjectEdges<T> {
             let (alpha, beta, q, flat_t) = if in_prism {
                 (alpha, beta, q, flat_t)
             } else {
-                let Some((a, b)) =
-                    onto_base_triangle(prism, ray, base_edges, alpha, beta, h, bound)
+                let Some((a, b)) = kept_across_wall(prism, ray, base_edges, alpha, beta, h, bound)
                 else {
                     continue;
                 };
@@ -462,7 +461,7 @@ impl<T: Real> ObjectEdges<T> {
             } else {
                 let uv = prism.texture_uv(alpha, beta);
                 let bound = point_error_bound(cubic, ray, T::Vec3::new(uv.x(), uv.y(), h), h);
-                let Some(ab) = onto_base_triangle(prism, ray, base_edges, alpha, beta, h, bound)
+                let Some(ab) = kept_across_wall(prism, ray, base_edges, alpha, beta, h, bound)
                 else {
                     return;
                 };
@@ -639,7 +638,7 @@ fn CLAMP_LIMIT<T: Real>() -> T {
 /// [`decidedly_outside_in_f64`]). `None` otherwise.
 #[cold]
 #[inline(never)]
-fn onto_base_triangle<T: Real>(
+fn kept_across_wall<T: Real>(
     prism: &Prism<T>,
     ray: &NonlinearRay<T>,
     edges: &BaseEdges<T>,
@@ -656,18 +655,7 @@ fn onto_base_triangle<T: Real>(
     // prism degenerate in world space the window of a crossing is wide, but the texture
     // coordinates still tell how far out the point is). Most candidates outside are far
     // outside (an object triangle crosses into the neighbouring prism), so this goes first.
-    let (a, b) = (alpha.max(T::ZERO), beta.max(T::ZERO));
-    let s = a + b;
-    let (a, b) = if s > T::ONE {
-        let (a, b) = (a / s, b / s);
-        if a + b > T::ONE {
-            (a, T::ONE - a)
-        } else {
-            (a, b)
-        }
-    } else {
-        (a, b)
-    };
+    let (a, b) = nlrt_shellmap::onto_base_triangle(alpha, beta);
     let (from, to) = (prism.texture_uv(alpha, beta), prism.texture_uv(a, b));
     let moved = (from.x() - to.x()).abs().max((from.y() - to.y()).abs());
     if !(moved <= tolerance.min(CLAMP_LIMIT::<T>())) {

@@ -106,6 +106,22 @@ pub struct LeakEdge {
     pub leaks: usize,
 }
 
+/// One more leak at `edge` of base `triangle` in `places`.
+fn count_leak(places: &mut Vec<LeakEdge>, triangle: u32, edge: u8, seam: bool) {
+    match places
+        .iter_mut()
+        .find(|e| e.triangle == triangle && e.edge == edge)
+    {
+        Some(e) => e.leaks += 1,
+        None => places.push(LeakEdge {
+            triangle,
+            edge,
+            seam,
+            leaks: 1,
+        }),
+    }
+}
+
 /// The edge of base triangle `tri` nearest the ray's base crossing at `t` (by barycentric
 /// coordinates, in f64), and whether it is a seam.
 fn nearest_edge<T: Real>(
@@ -709,18 +725,7 @@ fn measure_in<T: Real>(
                 continue;
             };
             let (edge, seam) = nearest_edge(surface, &ray, t_base, *triangle as usize);
-            match leak_edges
-                .iter_mut()
-                .find(|e| e.triangle == *triangle && e.edge == edge)
-            {
-                Some(e) => e.leaks += 1,
-                None => leak_edges.push(LeakEdge {
-                    triangle: *triangle,
-                    edge,
-                    seam,
-                    leaks: 1,
-                }),
-            }
+            count_leak(&mut leak_edges, *triangle, edge, seam);
         }
         leak_edges.sort_by(|a, b| b.leaks.cmp(&a.leaks).then(a.triangle.cmp(&b.triangle)));
         let leaks = verdicts

@@ -42,7 +42,7 @@ pub use microtriangle::{
     Hit, TexturePlane, alpha_beta_eq11, facing_unit, inside_triangle, intersect_flat_microtriangle,
     intersect_flat_texel, intersect_microtriangle, world_normal,
 };
-pub use prism::{Canonical, Prism};
+pub use prism::{Canonical, Prism, onto_base_triangle};
 pub use prism_hit::{PrismSpan, intersect_prism};
 pub use ray::{BaseEdges, NonlinearRay, Ray, decidedly_outside_in_f64};
 

@@ -27,6 +27,35 @@ pub struct Prism<T: Real> {
     pub uv: [T::Vec2; 3],
 }
 
+/// `(alpha, beta)` moved onto the base triangle (`alpha, beta >= 0`, `alpha + beta <= 1`):
+/// negative coordinates to 0, a sum above 1 scaled back to 1. For canonical coordinates that
+/// rounding put just outside the triangle; a point inside is returned unchanged.
+///
+/// ```
+/// use nlrt_shellmap::onto_base_triangle;
+/// assert_eq!(onto_base_triangle(0.25f64, 0.5), (0.25, 0.5));
+/// assert_eq!(onto_base_triangle(-1e-17f64, 0.5), (0.0, 0.5));
+/// let (a, b) = onto_base_triangle(0.75f32, 0.5);
+/// assert!(a + b <= 1.0 && (a - 0.6).abs() < 1e-6);
+/// ```
+#[must_use]
+pub fn onto_base_triangle<T: Real>(alpha: T, beta: T) -> (T, T) {
+    let (alpha, beta) = (alpha.max(T::ZERO), beta.max(T::ZERO));
+    let sum = alpha + beta;
+    if sum > T::ONE {
+        // The quotients may still sum to 1 + 1 ulp; `1 - alpha` then makes the sum round to
+        // at most 1 (it is within half an ulp of `beta` of 1).
+        let (alpha, beta) = (alpha / sum, beta / sum);
+        if alpha + beta > T::ONE {
+            (alpha, T::ONE - alpha)
+        } else {
+            (alpha, beta)
+        }
+    } else {
+        (alpha, beta)
+    }
+}
+
 impl<T: Real> Prism<T> {
     /// A prism from its base triangle, vertex normals and texture coordinates.
     #[must_use]

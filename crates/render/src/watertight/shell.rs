@@ -23,7 +23,7 @@
 
 use super::{
     DistanceError, GhostCount, HitJudgement, JudgedHits, LEAK_TOLERANCE, LeakEdge, LeakReport,
-    Verdict, shell_point_on_ray, spacing, to_f64, vertex_neighbours,
+    Verdict, count_leak, shell_point_on_ray, spacing, to_f64, vertex_neighbours,
 };
 use crate::method::Method;
 use crate::scenes::Scene;
@@ -511,18 +511,7 @@ pub(super) fn measure<T: Real>(
             continue;
         };
         let edge = nearest_base_edge(a.target.alpha, a.target.beta);
-        match leak_edges
-            .iter_mut()
-            .find(|e| e.triangle == *triangle && e.edge == edge)
-        {
-            Some(e) => e.leaks += 1,
-            None => leak_edges.push(LeakEdge {
-                triangle: *triangle,
-                edge,
-                seam: false,
-                leaks: 1,
-            }),
-        }
+        count_leak(&mut leak_edges, *triangle, edge, false);
     }
     leak_edges.sort_by(|a, b| b.leaks.cmp(&a.leaks).then(a.triangle.cmp(&b.triangle)));
 
