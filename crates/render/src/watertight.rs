@@ -106,6 +106,23 @@ pub struct LeakEdge {
     pub leaks: usize,
 }
 
+/// The oracle's input for texture-space triangle `tri` in `prism` on `ray`: the tracer's values,
+/// widened exactly to f64.
+fn oracle_scene<T: Real>(
+    prism: &nlrt_shellmap::Prism<T>,
+    ray: &Ray<T>,
+    tri: [[f64; 3]; 3],
+) -> nlrt_oracle::shell::ShellScene {
+    nlrt_oracle::shell::ShellScene {
+        p: prism.p.map(to_f64::<T>),
+        n: prism.n.map(to_f64::<T>),
+        uv: prism.uv.map(|t| [t.x().to_f64(), t.y().to_f64()]),
+        origin: to_f64::<T>(ray.origin),
+        dir: to_f64::<T>(ray.dir),
+        tri,
+    }
+}
+
 /// One more leak at `edge` of base `triangle` in `places`.
 fn count_leak(places: &mut Vec<LeakEdge>, triangle: u32, edge: u8, seam: bool) {
     match places
@@ -810,7 +827,7 @@ impl<'a, T: Real> TrueSurface<'a, T> {
     /// The nearest true hit at `t >= t_min` on the two microtriangles of `texel` in the prism
     /// of base triangle `triangle`.
     fn texel_hit(&self, ray: &Ray<T>, triangle: usize, texel: [i32; 2], t_min: f64) -> Option<f64> {
-        use nlrt_oracle::shell::{ShellScene, true_microtriangle_hit};
+        use nlrt_oracle::shell::true_microtriangle_hit;
         let field = self.surface.field();
         let texel_size = T::ONE / T::from_f64(field.side() as f64);
         let coord = |i: i32| (T::from_i32(i) * texel_size).to_f64();
@@ -832,14 +849,7 @@ impl<'a, T: Real> TrueSurface<'a, T> {
             [corners[0], corners[1], corners[2]],
             [corners[0], corners[2], corners[3]],
         ] {
-            let shell = ShellScene {
-                p: prism.p.map(to_f64::<T>),
-                n: prism.n.map(to_f64::<T>),
-                uv: prism.uv.map(|t| [t.x().to_f64(), t.y().to_f64()]),
-                origin: to_f64::<T>(ray.origin),
-                dir: to_f64::<T>(ray.dir),
-                tri,
-            };
+            let shell = oracle_scene(&prism, ray, tri);
             if let Some(h) = true_microtriangle_hit(&shell, 0.0, 1.0, t_min)
                 && best.is_none_or(|b| h.t < b)
             {

@@ -23,13 +23,13 @@
 
 use super::{
     DistanceError, GhostCount, HitJudgement, JudgedHits, LEAK_TOLERANCE, LeakEdge, LeakReport,
-    Verdict, count_leak, shell_point_on_ray, spacing, to_f64, vertex_neighbours,
+    Verdict, count_leak, oracle_scene, shell_point_on_ray, spacing, to_f64, vertex_neighbours,
 };
 use crate::method::Method;
 use crate::scenes::Scene;
 use nlrt_accel::{ShellHit, ShellSurface, TraversalStats};
 use nlrt_oracle::families::SplitMix64;
-use nlrt_oracle::shell::{ShellScene, TrueHit, true_microtriangle_hit};
+use nlrt_oracle::shell::{TrueHit, true_microtriangle_hit};
 use nlrt_poly::glam::DVec3;
 use nlrt_poly::{Real, Vector2, Vector3};
 use nlrt_shellmap::Ray;
@@ -192,14 +192,7 @@ impl<T: Real> TrueShell<'_, T> {
     ) -> Option<TrueHit> {
         let tri = self.surface.placed_triangle(k, tile)?.map(to_f64::<T>);
         let prism = self.surface.prism(base);
-        let scene = ShellScene {
-            p: prism.p.map(to_f64::<T>),
-            n: prism.n.map(to_f64::<T>),
-            uv: prism.uv.map(|t| [t.x().to_f64(), t.y().to_f64()]),
-            origin: to_f64::<T>(ray.origin),
-            dir: to_f64::<T>(ray.dir),
-            tri,
-        };
+        let scene = oracle_scene(&prism, ray, tri);
         // The object lies in [0, 1] in h (the triangle's own range would do, but the oracle's
         // root of a flat triangle is a 512-bit approximation that may fall a hair outside it).
         true_microtriangle_hit(&scene, 0.0, 1.0, t_min)
