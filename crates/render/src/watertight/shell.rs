@@ -337,9 +337,10 @@ impl<T: Real> TrueShell<'_, T> {
     }
 
     /// Whether the reported point lies on the reported object triangle within
-    /// [`LEAK_TOLERANCE`]: canonical coordinates in the base triangle, the texture point on the
-    /// triangle's plane and inside it (barycentric weights in its plane), and the shell point
-    /// (Eq. 1) on the ray. In f64 on the tracer's values.
+    /// [`LEAK_TOLERANCE`]: canonical coordinates in the base triangle (weights within it), the
+    /// texture point within it in texture units of the triangle's plane and of each edge it
+    /// lies beyond, and the shell point (Eq. 1) on the ray within it times the distance. In f64
+    /// on the tracer's values.
     fn on_triangle(&self, ray: &Ray<T>, hit: &ShellHit<T>) -> bool {
         let tol = LEAK_TOLERANCE;
         let prism = self.surface.prism(hit.triangle as usize);
