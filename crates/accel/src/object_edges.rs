@@ -30,12 +30,8 @@
 //! separate them (faces folded onto each other) keep the plain inside test.
 
 use alloc::vec::Vec;
-use nlrt_poly::{
-    Real, Vector2, Vector3, decided_sign, solve_cubic_in, solve_quadratic, solve_quadratic_in,
-};
-use nlrt_shellmap::{
-    BaseEdges, Hit, NonlinearRay, Prism, TexturePlane, alpha_beta_eq11, decidedly_outside_in_f64,
-};
+use nlrt_poly::{Real, Vector2, Vector3, decided_sign, solve_cubic_in, solve_quadratic_in};
+use nlrt_shellmap::{Hit, NonlinearRay, Prism, TexturePlane, alpha_beta_eq11};
 
 /// No shared edge.
 const NONE: u32 = u32::MAX;
@@ -252,7 +248,6 @@ impl<T: Real> ObjectEdges<T> {
         tri: &[T::Vec3; 3],
         prism: &Prism<T>,
         ray: &NonlinearRay<T>,
-        base_edges: &BaseEdges<T>,
         t_min: T,
         t_max: T,
         placed: impl Fn(u32) -> Option<[T::Vec3; 3]>,
@@ -303,8 +298,7 @@ impl<T: Real> ObjectEdges<T> {
             let (alpha, beta, q, flat_t) = if in_prism {
                 (alpha, beta, q, flat_t)
             } else {
-                let Some((a, b)) = kept_across_wall(prism, ray, base_edges, alpha, beta, h, bound)
-                else {
+                let Some((a, b)) = kept_across_wall(prism, alpha, beta, bound) else {
                     continue;
                 };
                 let uv = prism.texture_uv(a, b);
@@ -345,7 +339,6 @@ impl<T: Real> ObjectEdges<T> {
                             &cubic,
                             prism,
                             ray,
-                            base_edges,
                             [lo, hi],
                             t_min,
                             t_max,
@@ -387,7 +380,6 @@ impl<T: Real> ObjectEdges<T> {
         cubic: &[T; 4],
         prism: &Prism<T>,
         ray: &NonlinearRay<T>,
-        base_edges: &BaseEdges<T>,
         [lo, hi]: [T; 2],
         t_min: T,
         t_max: T,
@@ -461,8 +453,7 @@ impl<T: Real> ObjectEdges<T> {
             } else {
                 let uv = prism.texture_uv(alpha, beta);
                 let bound = point_error_bound(cubic, ray, T::Vec3::new(uv.x(), uv.y(), h), h);
-                let Some(ab) = kept_across_wall(prism, ray, base_edges, alpha, beta, h, bound)
-                else {
+                let Some(ab) = kept_across_wall(prism, alpha, beta, bound) else {
                     return;
                 };
                 ab
@@ -628,57 +619,26 @@ fn CLAMP_LIMIT<T: Real>() -> T {
     T::pow2(-12)
 }
 
-/// `(alpha, beta)` of a candidate point at height `h` outside the base triangle, moved onto it,
-/// when it lies across an edge by no more than rounding can put it there: the neighbouring
-/// prism computes the same wall with its own rounding, so a point on the wall may fall a
-/// rounding outside in both, and each keeps it unless it is farther out than its error bound
-/// `tolerance` (texture units), away from every crossing of that edge by more than the
-/// crossing's error window, or decidedly across the edge by the bound on the edge function's
-/// own rounding ([`BaseEdges::decidedly_outside`], and for `f32` the same decision in `f64`,
-/// [`decidedly_outside_in_f64`]). `None` otherwise.
+/// `(alpha, beta)` of a candidate point outside the base triangle, moved onto it, when the
+/// move is within the point's error bound `tolerance` (texture units, at most
+/// [`CLAMP_LIMIT`]): the neighbouring prism computes the same wall with its own rounding, so a
+/// point on the wall may fall a rounding outside in both, and each keeps it (on the wall). A
+/// test of the wall crossing's own window or sign at the candidate's height, as the texel test
+/// makes, would miss that the height itself is a rounded root: it rejected such points in both
+/// prisms (scales, f32). `None` otherwise.
 #[cold]
 #[inline(never)]
-fn kept_across_wall<T: Real>(
-    prism: &Prism<T>,
-    ray: &NonlinearRay<T>,
-    edges: &BaseEdges<T>,
-    alpha: T,
-    beta: T,
-    h: T,
-    tolerance: T,
-) -> Option<(T, T)> {
+fn kept_across_wall<T: Real>(prism: &Prism<T>, alpha: T, beta: T, tolerance: T) -> Option<(T, T)> {
     if !(alpha.is_finite() && beta.is_finite()) {
         return None;
     }
-    // Clamped onto the triangle (as the texel test does), moving the texture point by no more
-    // than its error bound: a point farther out is no rounding of a point on the wall (in a
-    // prism degenerate in world space the window of a crossing is wide, but the texture
-    // coordinates still tell how far out the point is). Most candidates outside are far
-    // outside (an object triangle crosses into the neighbouring prism), so this goes first.
+    // A point farther out is no rounding of a point on the wall (in a prism degenerate in
+    // world space the point's error bound is wide, but the texture coordinates still tell how
+    // far out the point is).
     let (a, b) = nlrt_shellmap::onto_base_triangle(alpha, beta);
     let (from, to) = (prism.texture_uv(alpha, beta), prism.texture_uv(a, b));
     let moved = (from.x() - to.x()).abs().max((from.y() - to.y()).abs());
-    if !(moved <= tolerance.min(CLAMP_LIMIT::<T>())) {
-        return None;
-    }
-    let across = [alpha < T::ZERO, beta < T::ZERO, alpha + beta > T::ONE];
-    for (k, &out) in across.iter().enumerate() {
-        if !out {
-            continue;
-        }
-        // Within the error window of a crossing of that edge (the window the texel test
-        // extends its pieces by), and not decidedly across it.
-        let near_crossing = solve_quadratic(edges.edges[k])
-            .iter()
-            .any(|&s| (h - s).abs() <= edges.window(k, s));
-        if !near_crossing
-            || edges.decidedly_outside(k, h)
-            || decidedly_outside_in_f64(prism, &ray.ray, k, h)
-        {
-            return None;
-        }
-    }
-    Some((a, b))
+    (moved <= tolerance.min(CLAMP_LIMIT::<T>())).then_some((a, b))
 }
 
 /// A first-order bound on the error of a candidate point `q` at height `h` on the curve, in
@@ -715,7 +675,7 @@ mod tests {
             mod $t {
                 use super::super::ObjectEdges;
                 use nlrt_poly::{Real, Vector3};
-                use nlrt_shellmap::{BaseEdges, NonlinearRay, Prism, Ray, intersect_microtriangle};
+                use nlrt_shellmap::{NonlinearRay, Prism, Ray, intersect_microtriangle};
                 use alloc::vec;
                 use alloc::vec::Vec;
                 type T = $t;
@@ -794,10 +754,9 @@ mod tests {
                                 };
                                 let aimed = (target - ray.origin).length();
                                 let nl = NonlinearRay::new(&prism, &ray);
-                                let base = BaseEdges::new(&nl);
                                 let hit = (0..2u32).filter_map(|k| {
                                     edges.intersect(
-                                        k, [0, 0], &tris[k as usize], &prism, &nl, &base,
+                                        k, [0, 0], &tris[k as usize], &prism, &nl,
                                         T::ZERO, T::INFINITY, |j| tris.get(j as usize).copied(),
                                     )
                                 });

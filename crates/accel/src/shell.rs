@@ -261,24 +261,17 @@ impl<T: Real> ShellSurface<T> {
         &self,
         prism: &Prism<T>,
         ray: &NonlinearRay<T>,
-        base_edges: &BaseEdges<T>,
         k: u32,
         [x, y]: [i32; 2],
         t_min: T,
         t_max: T,
     ) -> Option<Hit<T>> {
         let tri = Self::shifted(&self.object.triangles[k as usize], x, y);
-        self.object.edges.intersect(
-            k,
-            [x, y],
-            &tri,
-            prism,
-            ray,
-            base_edges,
-            t_min,
-            t_max,
-            |other| self.placed_triangle(other, [x, y]),
-        )
+        self.object
+            .edges
+            .intersect(k, [x, y], &tri, prism, ray, t_min, t_max, |other| {
+                self.placed_triangle(other, [x, y])
+            })
     }
 
     /// The object's BVH in tile `(x, y)` along `curve` (set up once per prism), nearest
@@ -292,7 +285,6 @@ impl<T: Real> ShellSurface<T> {
         tri: usize,
         prism: &Prism<T>,
         curve: &TextureCurve<'_, T>,
-        base_edges: &BaseEdges<T>,
         (x, y): (i32, i32),
         [h_in, h_out]: [T; 2],
         t_min: T,
@@ -342,15 +334,9 @@ impl<T: Real> ShellSurface<T> {
                     let first = node.index[c] as usize;
                     for &k in &order[first..first + node.count[c] as usize] {
                         stats.texel_tests += 1;
-                        if let Some(hit) = self.intersect_object_triangle(
-                            prism,
-                            ray,
-                            base_edges,
-                            k,
-                            [x, y],
-                            t_min,
-                            *t_max,
-                        ) {
+                        if let Some(hit) =
+                            self.intersect_object_triangle(prism, ray, k, [x, y], t_min, *t_max)
+                        {
                             *t_max = hit.t;
                             *best = Some(ShellHit {
                                 hit,
@@ -384,12 +370,11 @@ impl<T: Real> ShellSurface<T> {
         let [h_lo, h_hi] = self.object.h_range;
         let mut best = None;
         let curve = TextureCurve::new(prism, ray);
-        let base_edges = BaseEdges::new(ray);
         walk_cells::<T, CURVE_STACK>(
             self.prisms.roots(tri),
             prism,
             &curve,
-            &base_edges,
+            &BaseEdges::new(ray),
             T::ONE,
             t_min,
             t_max,
@@ -401,7 +386,6 @@ impl<T: Real> ShellSurface<T> {
                     tri,
                     prism,
                     &curve,
-                    &base_edges,
                     (x, y),
                     h,
                     t_min,
@@ -425,21 +409,14 @@ impl<T: Real> ShellSurface<T> {
         t_max: T,
     ) -> Option<ShellHit<T>> {
         let [x0, y0, x1, y1] = self.prisms.roots(tri).texels;
-        let base_edges = BaseEdges::new(ray);
         let mut best = None;
         let mut t_max = t_max;
         for y in y0..=y1 {
             for x in x0..=x1 {
                 for k in 0..self.object.triangles.len() as u32 {
-                    if let Some(hit) = self.intersect_object_triangle(
-                        prism,
-                        ray,
-                        &base_edges,
-                        k,
-                        [x, y],
-                        t_min,
-                        t_max,
-                    ) {
+                    if let Some(hit) =
+                        self.intersect_object_triangle(prism, ray, k, [x, y], t_min, t_max)
+                    {
                         t_max = hit.t;
                         best = Some(ShellHit {
                             hit,
