@@ -30,7 +30,10 @@
 //! separate them (faces folded onto each other) keep the plain inside test.
 
 use alloc::vec::Vec;
-use nlrt_poly::{Real, Vector2, Vector3, decided_sign, solve_cubic_in, solve_quadratic_in};
+use nlrt_poly::{
+    Real, Vector2, Vector3, decided_sign, horner, horner_with_bound, solve_cubic_in,
+    solve_quadratic_in,
+};
 use nlrt_shellmap::{Hit, NonlinearRay, Prism, TexturePlane, alpha_beta_eq11};
 
 /// No shared edge.
@@ -579,8 +582,8 @@ impl<T: Real> Side<T> {
             let a = if j == 0 { T::ZERO } else { splits[j - 1] };
             let b = if j == count { T::ONE } else { splits[j] };
             let h = (a + b) * T::HALF;
-            let d = value_and_slope(&ray.d, h).0;
-            let v = value_and_slope(&along, h).0;
+            let d = horner(&ray.d, h);
+            let v = horner(&along, h);
             *side = d != T::ZERO && ((v > T::ZERO) == (d > T::ZERO)) == positive;
         }
         Self {
@@ -650,7 +653,7 @@ fn kept_across_wall<T: Real>(prism: &Prism<T>, alpha: T, beta: T, tolerance: T) 
 fn point_error_bound<T: Real>(cubic: &[T; 4], ray: &NonlinearRay<T>, q: T::Vec3, h: T) -> T {
     let eps = T::EPSILON;
     let size = q.x().abs().max(q.y().abs()).max(h.abs()).max(T::ONE);
-    let magnitude = value_and_slope(&cubic.map(T::abs), h.abs()).0;
+    let (_, rounding) = horner_with_bound(cubic, h);
     let slope = value_and_slope(cubic, h).1.abs();
     let (d, d_slope) = value_and_slope(&ray.d, h);
     let u_slope = value_and_slope(&ray.u, h).1;
@@ -658,7 +661,7 @@ fn point_error_bound<T: Real>(cubic: &[T; 4], ray: &NonlinearRay<T>, q: T::Vec3,
     // speed = A / |D| + 1 and root error = (6 eps magnitude + eps |h| slope) / slope, as one
     // quotient (infinite where the curve or the cubic is stationary).
     let a = (u_slope - q.x() * d_slope).abs() + (v_slope - q.y() * d_slope).abs();
-    let root = T::from_i32(6) * eps * magnitude + eps * h.abs() * slope;
+    let root = rounding + eps * h.abs() * slope;
     let denominator = d.abs() * slope;
     let moved = if denominator > T::ZERO {
         (a + d.abs()) * root / denominator
