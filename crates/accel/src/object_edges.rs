@@ -280,13 +280,20 @@ impl<T: Real> ObjectEdges<T> {
                 .cross_section_hit(&ray.ray, lo)
                 .map(|(t, alpha, beta)| (alpha, beta, lo, Some(t)));
         } else {
-            for (slot, &h) in
-                solve_cubic_in(cubic, lo - HEIGHT_WINDOW::<T>(), hi + HEIGHT_WINDOW::<T>())
-                    .iter()
-                    .enumerate()
-            {
+            // Solved on the widest window ([`CLAMP_LIMIT`]); a root beyond [`HEIGHT_WINDOW`]
+            // (rare) is kept only within its end's [`height_window`], computed then.
+            let (near_lo, near_hi) = (lo - HEIGHT_WINDOW::<T>(), hi + HEIGHT_WINDOW::<T>());
+            let roots = solve_cubic_in(cubic, lo - CLAMP_LIMIT::<T>(), hi + CLAMP_LIMIT::<T>());
+            let mut slot = 0;
+            for &h in roots.iter() {
+                let beyond = (h < near_lo && lo - h > height_window(&cubic, lo))
+                    || (h > near_hi && h - hi > height_window(&cubic, hi));
+                if beyond {
+                    continue;
+                }
                 candidates[slot] =
                     alpha_beta_eq11(ray, &plane_abh, h).map(|(alpha, beta)| (alpha, beta, h, None));
+                slot += 1;
             }
         }
         let mut best: Option<Hit<T>> = None;
@@ -423,7 +430,17 @@ impl<T: Real> ObjectEdges<T> {
         let reversed = self.reversed.get(k as usize).copied().unwrap_or(0);
         let plane_abh = plane.canonical(prism);
         let heights = [lo, hi];
-        let (lo, hi) = (lo - HEIGHT_WINDOW::<T>(), hi + HEIGHT_WINDOW::<T>());
+        // The triangle's window, and each separating plane's at the same ends (its crossing
+        // at an edge on the triangle's highest or lowest height errs by its own conditioning).
+        let window = |end: T| {
+            sides
+                .iter()
+                .flatten()
+                .fold(height_window(cubic, end), |w, s| {
+                    w.max(height_window(&s.along, end))
+                })
+        };
+        let (lo, hi) = (lo - window(lo), hi + window(hi));
 
         // Split points in (lo, hi): the separating planes' crossings (tags 0-2) and the poles
         // (tag 3).
@@ -522,12 +539,33 @@ impl<T: Real> ObjectEdges<T> {
     }
 }
 
-/// Heights a piece search extends beyond the triangle's own range: a few ulps of the unit
-/// height, so that a flat triangle's single height becomes an interval holding its plane's
+/// Heights a root search extends beyond the triangle's own range at least: a few ulps of the
+/// unit height, so that a flat triangle's single height becomes an interval holding its plane's
 /// root, and a split point within rounding of the range's end is compared by both triangles.
 #[allow(non_snake_case)]
 fn HEIGHT_WINDOW<T: Real>() -> T {
     T::from_i32(16) * T::EPSILON
+}
+
+/// How far beyond `end` (a height-range end of the triangle) a root of `cubic` may lie and
+/// still be a rounding of a root at `end`: the first-order error of a root there (the Horner
+/// bound with the rounding of `h` itself, over the slope, with the safety factor of
+/// [`point_error_bound`]), at least [`HEIGHT_WINDOW`] and at most [`CLAMP_LIMIT`] (the farthest
+/// a candidate is moved in texture units: beyond it the slope is near zero, a tangency, and a
+/// point that far out is no rounding of one on the range). An edge along a triangle's highest
+/// or lowest height (the ridge of a feather's vane) puts the root of its two planes there, and
+/// an ill-conditioned cubic moves it by more than a fixed few ulps (20 ulps on feathers, f64).
+fn height_window<T: Real>(cubic: &[T; 4], end: T) -> T {
+    let (_, rounding) = horner_with_bound(cubic, end);
+    let slope = value_and_slope(cubic, end).1.abs();
+    let error = T::from_i32(16) * (rounding + T::EPSILON * end.abs() * slope) / slope;
+    // `!(x <= y)`: a zero slope gives infinity or NaN, both capped.
+    let capped = if error <= CLAMP_LIMIT::<T>() {
+        error
+    } else {
+        CLAMP_LIMIT::<T>()
+    };
+    capped.max(HEIGHT_WINDOW::<T>())
 }
 
 /// A shared edge as the piece search needs it: where the curve crosses its separating plane,
@@ -546,6 +584,8 @@ struct Side<T: Real> {
     ours: [bool; 6],
     /// The neighbour's plane cubic, oriented like this triangle's.
     neighbour: [T; 4],
+    /// The separating plane's cubic along the curve.
+    along: [T; 4],
 }
 
 impl<T: Real> Side<T> {
@@ -592,6 +632,7 @@ impl<T: Real> Side<T> {
             count,
             ours,
             neighbour,
+            along,
         }
     }
 

@@ -7,7 +7,7 @@
 //! - `trace/<scene>/<type>`: primary camera rays through the whole structure (TLAS, BLAS
 //!   walk, texel or object tests) of the mountain (2 triangles, 4096^2 fBm), the fur (8,192
 //!   triangles, 256^2 spikes tiled 8 x 8) and two shell-mapped scenes, the Cornell box
-//!   (2,780 object triangles, 16 x 16 tiles) and the high-polygon blob (145,292), f32 and
+//!   (2,780 object triangles, 16 x 16 tiles) and the high-polygon blob (145,260), f32 and
 //!   f64, one thread.
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};

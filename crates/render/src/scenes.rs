@@ -1034,14 +1034,24 @@ pub fn feathers() -> Scene {
 
 /// A closed, bumpy blob in the unit tile: a sphere of `n x n` quads (`2 n^2` triangles:
 /// 145,800 for `n = 270`) whose radius ripples with the angles, the high-polygon instanced
-/// object of Table 2 (h).
+/// object of Table 2 (h). Closed exactly: the seam meridian (`s = 1`) is the first one
+/// (`s = 0`) and each pole is one point, so every edge there is shared bit for bit (`sin(2 pi)`
+/// and `sin(pi)` are not 0 in floating point: evaluated as they come, the copies differ by
+/// 1e-16, the object's shared edges there are not recognised as shared, and the pole's fan
+/// keeps zero-area slivers between them).
 #[must_use]
 pub fn blob_object(n: usize) -> Vec<[DVec3; 3]> {
     let point = |s: f64, t: f64| {
+        let centre = DVec3::new(0.5, 0.5, 0.5);
+        let base = 0.36;
+        if t == 0.0 || t == 1.0 {
+            return centre + DVec3::new(0.0, 0.0, if t == 0.0 { base } else { -base });
+        }
+        let s = if s == 1.0 { 0.0 } else { s };
         let (theta, phi) = (TAU * s, std::f64::consts::PI * t);
-        let r = 0.36 + 0.06 * (7.0 * theta).sin() * (5.0 * phi).sin();
+        let r = base + 0.06 * (7.0 * theta).sin() * (5.0 * phi).sin();
         let dir = DVec3::new(theta.cos() * phi.sin(), theta.sin() * phi.sin(), phi.cos());
-        DVec3::new(0.5, 0.5, 0.5) + dir * r
+        centre + dir * r
     };
     patch(n, point)
         .into_iter()

@@ -379,35 +379,49 @@ impl<T: Real> BaseEdges<T> {
     /// `[h_lo, h_hi]`). Between consecutive crossings and poles inside-ness cannot change, so
     /// each piece is decided at its midpoint; a curve that only touches the triangle gives
     /// `h_in == h_out`.
+    ///
+    /// A crossing a rounding beyond `h_lo` or `h_hi` counts too when its window reaches into
+    /// the range (a ray through a prism wall exactly at the lowest height asked for, such as an
+    /// object's flat floor: without it the neighbour prisms could both leave the point out).
+    /// Where an edge is within its coefficients' rounding bound of 0 at an end, the search for
+    /// its crossings and the pieces extend twice its window there beyond that end (twice: the
+    /// window of a crossing just beyond is the end's own up to the change of the slope between
+    /// them), and the stretches are cut back to `[h_lo, h_hi]`.
     pub fn stretches(&self, h_lo: T, h_hi: T, mut stretch: impl FnMut(T, T)) {
         if !(h_lo <= h_hi) || self.misses(h_lo, h_hi) {
             return;
         }
+        let (lo, hi) = (self.beyond(h_lo, -T::ONE), self.beyond(h_hi, T::ONE));
         // (height, window) of each candidate: the ends, the edge crossings, the poles.
         let mut cuts = [(T::ZERO, T::ZERO); 10];
-        cuts[0] = (h_lo, T::ZERO);
-        cuts[1] = (h_hi, T::ZERO);
+        cuts[0] = (lo, T::ZERO);
+        cuts[1] = (hi, T::ZERO);
         let mut n = 2;
-        // Edges (and a pole) the curve cannot reach on [h_lo, h_hi] have no root to solve for.
+        // Edges (and a pole) the curve cannot reach on [lo, hi] have no root to solve for.
         for k in 0..3 {
-            if !self.may_cross(k, h_lo, h_hi) {
+            if !self.may_cross(k, lo, hi) {
                 continue;
             }
-            for &r in solve_quadratic_in(self.edges[k], h_lo, h_hi).iter() {
+            for &r in solve_quadratic_in(self.edges[k], lo, hi).iter() {
                 cuts[n] = (r, self.window(k, r));
                 n += 1;
             }
         }
-        if self.may_have_pole(h_lo, h_hi) {
-            for &r in solve_quadratic_in(self.d, h_lo, h_hi).iter() {
+        if self.may_have_pole(lo, hi) {
+            for &r in solve_quadratic_in(self.d, lo, hi).iter() {
                 cuts[n] = (r, T::ZERO);
                 n += 1;
             }
         }
         let cuts = &mut cuts[..n];
         cuts.sort_unstable_by(|a, b| a.0.partial_cmp(&b.0).unwrap_or(core::cmp::Ordering::Equal));
+        let mut emit = |from: T, to: T| {
+            let (from, to) = (from.max(h_lo), to.min(h_hi));
+            if from <= to {
+                stretch(from, to);
+            }
+        };
         let mut open: Option<T> = None;
-        let mut close = |from: T, (to, w): (T, T)| stretch(from, (to + w).min(h_hi));
         for i in 0..n - 1 {
             let ((c0, w0), (c1, _)) = (cuts[i], cuts[i + 1]);
             let inside = if c1 > c0 {
@@ -416,18 +430,37 @@ impl<T: Real> BaseEdges<T> {
                 continue;
             };
             match (inside, open) {
-                (true, None) => open = Some((c0 - w0).max(h_lo)),
+                (true, None) => open = Some(c0 - w0),
                 (false, Some(from)) => {
-                    close(from, cuts[i]);
+                    let (to, w) = cuts[i];
+                    emit(from, to + w);
                     open = None;
                 }
                 _ => {}
             }
         }
         if let Some(from) = open {
-            close(from, cuts[n - 1]);
-        } else if h_lo == h_hi && self.contains(h_lo) {
-            stretch(h_lo, h_hi);
+            let (to, w) = cuts[n - 1];
+            emit(from, to + w);
+        } else if lo == hi && self.contains(lo) {
+            emit(lo, hi);
         }
+    }
+
+    /// `end` moved `side` (-1 or 1) by twice the largest window of an edge within its
+    /// coefficients' rounding bound of 0 there (see [`BaseEdges::stretches`]); `end` itself
+    /// where none is. At most `1 + |end|` (a window wider than the prism's heights already
+    /// spans them; it is infinite where the edge is tangent).
+    #[inline]
+    fn beyond(&self, end: T, side: T) -> T {
+        let a = end.abs();
+        let margin = self.error_scale * (T::ONE + a + a * a);
+        let mut reach = T::ZERO;
+        for k in 0..3 {
+            if quadratic_at(&self.edges[k], end).abs() <= margin {
+                reach = reach.max(T::TWO * self.window(k, end));
+            }
+        }
+        end + side * reach.min(T::ONE + a)
     }
 }

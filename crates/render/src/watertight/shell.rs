@@ -403,6 +403,62 @@ struct Aimed<T: Real> {
     hit: Option<ShellHit<T>>,
 }
 
+/// Per base triangle and base edge ([`nlrt_accel::EDGE_VERTICES`]), whether the mapped
+/// object ends there: no other base triangle has that edge (the same two vertex positions),
+/// or the triangle or every other one with it is degenerate in world or uv space (Fig. 9's
+/// columns: a prism pinched to a sheet or a uv line maps its part of the object to nothing of
+/// positive area). A uv seam is not an end (the positions continue; a tileable object
+/// continues across it). A ray through such an edge passes the surface's outer boundary,
+/// where it may miss within rounding: nothing lies beyond to let it through to.
+fn open_base_edges<T: Real>(mesh: &nlrt_accel::BaseMesh<T>) -> Vec<[bool; 3]> {
+    let position = |v: u32| to_f64::<T>(mesh.positions()[v as usize]);
+    let uv = |v: u32| {
+        let t = mesh.uvs()[v as usize];
+        [t.x().to_f64(), t.y().to_f64()]
+    };
+    // Degenerate within the tracer's rounding: the cross product's size against the product
+    // of the edges' (16 ulps of the tracer's type; a genuine sliver is far above it).
+    let flat = |a: [f64; 3], b: [f64; 3], c: [f64; 3]| {
+        let (e0, e1) = (
+            DVec3::from(b) - DVec3::from(a),
+            DVec3::from(c) - DVec3::from(a),
+        );
+        e0.cross(e1).length() <= 16.0 * T::EPSILON.to_f64() * e0.length() * e1.length()
+    };
+    let solid: Vec<bool> = (0..mesh.triangle_count())
+        .map(|i| {
+            let [a, b, c] = mesh.triangle(i);
+            let lift = |v: u32| {
+                let [x, y] = uv(v);
+                [x, y, 0.0]
+            };
+            !flat(position(a), position(b), position(c)) && !flat(lift(a), lift(b), lift(c))
+        })
+        .collect();
+    let key = |i: usize, e: usize| {
+        let t = mesh.triangle(i);
+        let [p, q] = nlrt_accel::EDGE_VERTICES[e].map(|k| position(t[k]).map(f64::to_bits));
+        if p <= q { [p, q] } else { [q, p] }
+    };
+    let mut solid_sides: HashMap<[[u64; 3]; 2], usize> = HashMap::new();
+    for (i, &is_solid) in solid.iter().enumerate() {
+        for e in 0..3 {
+            *solid_sides.entry(key(i, e)).or_default() += usize::from(is_solid);
+        }
+    }
+    (0..mesh.triangle_count())
+        .map(|i| [0, 1, 2].map(|e| !solid[i] || solid_sides[&key(i, e)] < 2))
+        .collect()
+}
+
+/// Whether canonical point `(alpha, beta)` lies on one of the open edges `open` (within
+/// [`LEAK_TOLERANCE`] in barycentric weight, the tolerance within which the hit judge takes a
+/// reported point as on its triangle).
+fn on_open_edge(open: [bool; 3], alpha: f64, beta: f64) -> bool {
+    let weights = [alpha, beta, 1.0 - alpha - beta];
+    (0..3).any(|e| open[e] && weights[e] <= LEAK_TOLERANCE)
+}
+
 /// The nearest base edge of a canonical point (0 `alpha = 0`, 1 `beta = 0`, 2
 /// `alpha + beta = 1`, as [`nlrt_accel::EDGE_VERTICES`]).
 fn nearest_base_edge(alpha: f64, beta: f64) -> u8 {
@@ -426,6 +482,7 @@ pub(super) fn measure<T: Real>(
         partners: edge_partners::<T>(surface.object().triangles()),
     };
     let partners = &truth.partners;
+    let open_edges = open_base_edges(surface.mesh());
     let eye = {
         let e = scene.camera.eye;
         T::Vec3::new(T::from_f64(e.x), T::from_f64(e.y), T::from_f64(e.z))
@@ -448,7 +505,9 @@ pub(super) fn measure<T: Real>(
             let truth = truth
                 .hit_around(&ray, target.base, triangles, target.tile, 0.0)
                 .map(|h| h.0.t)
-                .filter(|_| !(target.on_edge && truth.grazes(&ray, &target)));
+                .filter(|_| !(target.on_edge && truth.grazes(&ray, &target)))
+                // The object's outer boundary decides nothing (see `open_base_edges`).
+                .filter(|_| !on_open_edge(open_edges[target.base], target.alpha, target.beta));
             let hit = surface.intersect(&ray, T::ZERO, T::INFINITY, &mut TraversalStats::default());
             Some(Aimed {
                 target,
@@ -646,15 +705,96 @@ mod tests {
         assert!(judged > 40, "{judged}");
     }
 
+    /// Fig. 9's columns: the regular column's diagonal joins its two prisms; where the other
+    /// triangle of a column is degenerate in uv (columns 2, 3), in both (6) or in world space
+    /// only (7), the object ends at the diagonal, seen from either side; a column's outer
+    /// edges end it everywhere.
+    #[test]
+    fn the_object_ends_at_edges_to_degenerate_prisms() {
+        let scene = builtin("fig9", Size::Small).expect("built-in");
+        let Nonlinear::Shell(surface) = Nonlinear::<f64>::new(&scene) else {
+            unreachable!("shell scene")
+        };
+        let open = open_base_edges(surface.mesh());
+        // Triangle 2c is (0, 1, 2): its diagonal is edge 0 (alpha = 0); triangle 2c + 1 is
+        // (0, 2, 3): its diagonal is edge 1 (beta = 0).
+        assert_eq!(open[0], [false, true, true]);
+        assert_eq!(open[1], [true, false, true]);
+        for column in [1, 2, 5, 6] {
+            assert_eq!(open[2 * column], [true; 3], "column {}", column + 1);
+        }
+        // Column 7's world-degenerate triangle and its neighbour, seen from both sides.
+        assert_eq!(open[13], [true; 3]);
+    }
+
+    /// Aimed at points of the wall between fig9's regular column's two prisms (its diagonal)
+    /// at the object's lowest height, where the floor's diagonal edge runs: the number of rays
+    /// that miss, in precision `T`.
+    fn misses_along_the_floor_diagonal<T: Real>(rays: usize) -> usize {
+        let scene = builtin("fig9", Size::Small).expect("built-in");
+        let Nonlinear::Shell(surface) = Nonlinear::<T>::new(&scene) else {
+            unreachable!("shell scene")
+        };
+        let floor = surface
+            .object()
+            .triangles()
+            .iter()
+            .flatten()
+            .map(|p| p.z().to_f64())
+            .fold(f64::INFINITY, f64::min);
+        // Base triangle 0 has uvs (0, 0), (1, 0), (1, 1): its edge 0 (alpha = 0) is the
+        // diagonal, shared with base triangle 1.
+        let prism = surface.prism(0);
+        let eye = scene.camera.eye;
+        (0..rays)
+            .filter(|&k| {
+                // The floor spans [0.05, 0.95] in u and v (`cornell_object`).
+                let s = 0.05 + 0.9 * (k as f64 + 0.5) / rays as f64;
+                let weights = [1.0 - s, 0.0, s];
+                let world: DVec3 = (0..3)
+                    .map(|i| {
+                        (DVec3::from(to_f64::<T>(prism.p[i]))
+                            + DVec3::from(to_f64::<T>(prism.n[i])) * floor)
+                            * weights[i]
+                    })
+                    .sum();
+                let d = world - eye;
+                let Some(ray) = Ray::<T>::new(
+                    T::Vec3::new(T::from_f64(eye.x), T::from_f64(eye.y), T::from_f64(eye.z)),
+                    T::Vec3::new(T::from_f64(d.x), T::from_f64(d.y), T::from_f64(d.z)),
+                ) else {
+                    return false;
+                };
+                surface
+                    .intersect(&ray, T::ZERO, T::INFINITY, &mut TraversalStats::default())
+                    .is_none()
+            })
+            .count()
+    }
+
+    /// A ray through a prism wall at the lowest height the walk searches (the object's) is
+    /// not lost: there the wall crossing, computed a rounding below that height in one prism,
+    /// used to fall outside the heights searched, while the other prism's triangle test put
+    /// the point (on an object edge along the wall) across the wall (60 of these 4,096 rays
+    /// missed in f32 and 382 in f64).
+    #[test]
+    fn rays_through_a_prism_wall_at_the_lowest_object_height_hit() {
+        let misses = [
+            misses_along_the_floor_diagonal::<f32>(4096),
+            misses_along_the_floor_diagonal::<f64>(4096),
+        ];
+        assert_eq!(misses, [0, 0], "misses in f32, f64");
+    }
+
     /// Rays aimed at the objects of the shell scenes (half of them at edges two object
     /// triangles share) are not let through, in either precision: 1,024 rays per scene and
     /// precision, every one the oracle decides (before the object triangles' shared edges were
     /// made watertight, 1.2-1.5% of them leaked in both precisions on the high-polygon blob and
-    /// the scales). The sphere of `cornell` is left out: its pole prisms, degenerate in world
-    /// space, let a few rays through at the walk (docs/watertightness.md).
+    /// the scales), and Fig. 9's degenerate columns. The sphere of `cornell` is left out: its
+    /// pole prisms, degenerate in world space, let a few rays through (docs/watertightness.md).
     #[test]
     fn aimed_rays_do_not_leak_through_shell_objects() {
-        for name in ["highpoly", "scales", "feathers"] {
+        for name in ["highpoly", "scales", "feathers", "fig9"] {
             let scene = builtin(name, Size::Small).expect("built-in");
             let reports = super::super::measure_all(
                 &scene,
@@ -667,8 +807,11 @@ mod tests {
             )
             .expect("a shell scene is judged");
             for r in reports {
+                // Most rays are decided: all but those through silhouettes, points beside the
+                // object's outer boundary and, on fig9, its degenerate columns' open edges
+                // (13% of 65,536 there).
                 assert!(
-                    r.decided > 900,
+                    r.decided > 850,
                     "{name} {}: {} decided",
                     r.method,
                     r.decided
