@@ -4,8 +4,9 @@
 //!
 //! `valgrind --tool=callgrind --toggle-collect='*solve_all*' target/release/examples/first_root_counts f32 near`
 //!
-//! Arguments: `f32` or `f64`; `unit` (three roots in `[0, 1]`) or `near` (one root in
-//! `[0, 1/16]`, two in `[1/2, 1]`).
+//! Arguments: `f32` or `f64`; `unit` (three roots in `[0, 1]`), `near` (one root in
+//! `[0, 1/16]`, two in `[1/2, 1]`), or one of the oracle's whole-line families, `log-uniform`
+//! (coefficients) and `clustered` (roots), solved on the whole line.
 
 use nlrt_oracle::families::{RandomFamily, SplitMix64, cubic_from_roots};
 use nlrt_poly::{Real, first_cubic_root_in, solve_cubic_in};
@@ -13,9 +14,19 @@ use std::hint::black_box;
 
 const CUBICS: usize = 20_000;
 
-fn cubics<T: Real>(family: &str) -> Vec<[T; 4]> {
+/// The family's cubics and the interval they are solved on.
+fn cubics<T: Real>(family: &str) -> (Vec<[T; 4]>, T, T) {
     let mut rng = SplitMix64::new(0xf1257);
-    (0..CUBICS)
+    let whole_line = match family {
+        "log-uniform" => Some(RandomFamily::LogUniformCoefficients),
+        "clustered" => Some(RandomFamily::Clustered),
+        _ => None,
+    };
+    if let Some(f) = whole_line {
+        let c = (0..CUBICS).map(|_| f.sample::<T>(&mut rng).coeffs).collect();
+        return (c, T::NEG_INFINITY, T::INFINITY);
+    }
+    let c = (0..CUBICS)
         .map(|_| match family {
             "near" => cubic_from_roots::<T>(
                 [
@@ -27,23 +38,24 @@ fn cubics<T: Real>(family: &str) -> Vec<[T; 4]> {
             ),
             _ => RandomFamily::ThreeRootsInUnit.sample::<T>(&mut rng).coeffs,
         })
-        .collect()
+        .collect();
+    (c, T::ZERO, T::ONE)
 }
 
 /// Checksum of every first root by `first_cubic_root_in`.
 #[inline(never)]
-fn solve_all_first<T: Real>(cubics: &[[T; 4]]) -> u64 {
+fn solve_all_first<T: Real>(cubics: &[[T; 4]], lo: T, hi: T) -> u64 {
     cubics.iter().fold(0u64, |sum, &c| {
-        let r = first_cubic_root_in(black_box(c), T::ZERO, T::ONE);
+        let r = first_cubic_root_in(black_box(c), lo, hi);
         sum.rotate_left(3) ^ r.map_or(1, |r| r.to_f64().to_bits())
     })
 }
 
 /// Checksum of every root by `solve_cubic_in`.
 #[inline(never)]
-fn solve_all_roots<T: Real>(cubics: &[[T; 4]]) -> u64 {
+fn solve_all_roots<T: Real>(cubics: &[[T; 4]], lo: T, hi: T) -> u64 {
     cubics.iter().fold(0u64, |sum, &c| {
-        let roots = solve_cubic_in(black_box(c), T::ZERO, T::ONE);
+        let roots = solve_cubic_in(black_box(c), lo, hi);
         roots
             .iter()
             .fold(sum, |s, r| s.rotate_left(3) ^ r.to_f64().to_bits())
@@ -51,12 +63,12 @@ fn solve_all_roots<T: Real>(cubics: &[[T; 4]]) -> u64 {
 }
 
 fn run<T: Real>(family: &str) {
-    let c = cubics::<T>(family);
+    let (c, lo, hi) = cubics::<T>(family);
     println!(
         "{} {family}: first {:016x}, all {:016x}",
         T::NAME,
-        solve_all_first(&c),
-        solve_all_roots(&c)
+        solve_all_first(&c, lo, hi),
+        solve_all_roots(&c, lo, hi)
     );
 }
 

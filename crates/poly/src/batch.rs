@@ -221,6 +221,7 @@ fn kernel<T: Real, L: Lanes<T>, const FIRST: bool>(
     let (d0, d1, d2) = (c1, c2 * two, c3 * L::splat(T::THREE));
     let slope = |x: L| d2.mul_add(x, d1).mul_add(x, d0);
     let curvature = |x: L| (d2 * two).mul_add(x, d1);
+    let bend_rate = (c3 * L::splat(T::from_i32(12))).abs();
     let magnitude = |x: L| {
         let ax = x.abs();
         abs_c[3]
@@ -252,9 +253,7 @@ fn kernel<T: Real, L: Lanes<T>, const FIRST: bool>(
     let half_inv = inv_a2 * half;
     let xi = (-d1) * half_inv;
     let s = root * half_inv.abs();
-    let inv_s = (d2 * two).abs() / root;
-    let inv_two_c3 = one / (two * c3);
-    let cosine = ((-value(xi)) * inv_two_c3) * ((inv_s * inv_s) * inv_s);
+    let cosine = (value(xi) / (disc * root)) * ((L::splat(T::from_i32(-108)) * c3) * c3.abs());
     let near_one = L::splat(T::ONE + T::pow2(-10));
     let have_guesses = two_critical & plain_at(x1) & plain_at(x2) & cosine.abs().lt(near_one);
     let cosine = cosine.max(-one).min(one);
@@ -312,10 +311,11 @@ fn kernel<T: Real, L: Lanes<T>, const FIRST: bool>(
     let converged = |x: L, step: L, df: L| {
         let next = x - step;
         let small_step = step.abs().le(next.abs()) & step.abs().le(x.abs());
-        let bend = curvature(x).abs().max(curvature(x - step * two).abs());
+        let size = step.abs();
+        let bend = size.mul_add(bend_rate, curvature(x).abs());
         small_step
-            & (((bend * step) * step).le((df * next).abs() * epsilon)
-                | step.abs().le(next.abs() * epsilon))
+            & (((bend * size) * size).le((df * next).abs() * epsilon)
+                | size.le(next.abs() * epsilon))
     };
     let fixed = fixed_steps::<T>();
     let mut found = [no_lane; 3];

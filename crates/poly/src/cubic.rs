@@ -84,6 +84,9 @@ struct Cubic<T> {
     d: [T; 3],
     /// `|c_i|`, for the rounding-error bound.
     abs_c: [T; 4],
+    /// `2 |p'''| = |4 d2| = |12 c3|`: twice the rate at which `p''` changes (see
+    /// [`converged`]).
+    bend_rate: T,
     /// All non-zero coefficients within `[2^-S, 2^S]`: for `|x| <= 2^R` plain Horner can
     /// neither overflow nor lose the terms to underflow (see `safe_coefficient_exponent`).
     moderate: bool,
@@ -106,6 +109,7 @@ impl<T: Real> Cubic<T> {
             c,
             d: [c[1], c[2] * T::TWO, c[3] * T::THREE],
             abs_c,
+            bend_rate: (c[3] * T::from_i32(12)).abs(),
             moderate,
             tiny_safe: c[0] != T::ZERO,
         }
@@ -202,8 +206,10 @@ impl<T: Real> Cubic<T> {
         let half_inv = inv_a2 * T::HALF;
         let xi = -a1 * half_inv;
         let s = root * half_inv.abs();
-        let inv_s = (a2 * T::TWO).abs() / root;
-        (critical, Guesses::from_parts(self, x1, x2, xi, s, inv_s))
+        (
+            critical,
+            Guesses::from_parts(self, x1, x2, xi, s, disc * root),
+        )
     }
 
     /// Critical points (roots of `p'`). Outside the moderate range the derivative is built from
@@ -243,8 +249,12 @@ fn sign_of<T: Real>(v: T) -> i8 {
 
 #[inline(always)]
 fn cubic_roots<T: Real, const FIRST: bool>(c: [T; 4], lo: T, hi: T) -> Roots<T> {
-    let finite = c[0].is_finite() && c[1].is_finite() && c[2].is_finite() && c[3].is_finite();
-    if !(lo <= hi && finite) {
+    if !(lo <= hi) {
+        return Roots::none();
+    }
+    let p = Cubic::new(c);
+    // Moderate coefficients are finite; only the others need the test.
+    if !p.moderate && !c.iter().all(|v| v.is_finite()) {
         return Roots::none();
     }
     if c[3] == T::ZERO {
@@ -255,7 +265,6 @@ fn cubic_roots<T: Real, const FIRST: bool>(c: [T; 4], lo: T, hi: T) -> Roots<T> 
             roots
         };
     }
-    let p = Cubic::new(c);
     // Every root lies strictly inside Fujiwara's bound: an infinite end can be replaced by it,
     // so that moderate polynomials solved on the whole line take the fast path too. The
     // polynomial cannot vanish at the bound, so its sign there is that at infinity.
@@ -303,14 +312,8 @@ fn cubic_roots<T: Real, const FIRST: bool>(c: [T; 4], lo: T, hi: T) -> Roots<T> 
     let fast = p.plain_on(lo, hi, &points);
     if fast {
         // Moderate input (the ray tracer's case): straight-line code over all four slots.
-        let noise = noise_factor::<T>();
         values = points.map(|x| p.value(x));
-        let bounds = points.map(|x| noise * p.magnitude(x));
-        residual = values.map(T::abs);
-        for i in 0..4 {
-            sign[i] = sign_of(values[i]);
-            near_zero[i] = residual[i] <= bounds[i];
-        }
+        sign = values.map(sign_of);
     } else {
         let leading: i8 = if p.c[3] > T::ZERO { 1 } else { -1 };
         for i in 0..n {
@@ -339,6 +342,16 @@ fn cubic_roots<T: Real, const FIRST: bool>(c: [T; 4], lo: T, hi: T) -> Roots<T> 
         && let Some(roots) = three_roots_fast(&p, &points, g)
     {
         return roots;
+    }
+    if fast {
+        // The rounding-error bounds, needed only past the three-root fast path (which decides
+        // by the signs alone).
+        let noise = noise_factor::<T>();
+        let bounds = points.map(|x| noise * p.magnitude(x));
+        residual = values.map(T::abs);
+        for i in 0..4 {
+            near_zero[i] = residual[i] <= bounds[i];
+        }
     }
     let mut roots = Roots::none();
     let mut last_point: Option<usize> = None; // index of a point reported as a root just before
@@ -411,16 +424,20 @@ impl<T: Real> Guesses<T> {
     };
 
     /// Guesses from the critical points `x1 < x2`, their midpoint `xi` (the inflection), their
-    /// half-distance `s` and `1 / s`, for a moderate cubic (see [`Cubic::moderate`]).
+    /// half-distance `s` and `disc^(3/2)` (the discriminant of `p'` times its square root),
+    /// for a moderate cubic (see [`Cubic::moderate`]).
     #[inline(always)]
-    fn from_parts(p: &Cubic<T>, x1: T, x2: T, xi: T, s: T, inv_s: T) -> Self {
-        // Only for moderate arguments, where s^3 and p(xi) cannot overflow.
+    fn from_parts(p: &Cubic<T>, x1: T, x2: T, xi: T, s: T, disc_three_halves: T) -> Self {
+        // Only for moderate arguments, where p(xi) cannot overflow.
         if !(p.plain_at(x1) && p.plain_at(x2)) {
             return Self::NONE;
         }
-        // cos 3 phi = -p(xi) / (2 c3 s^3), with the divisions done ahead as reciprocals.
-        let inv_two_c3 = T::ONE / (T::TWO * p.c[3]);
-        let cosine = -p.value(xi) * inv_two_c3 * (inv_s * inv_s * inv_s);
+        // cos 3 phi = -p(xi) / (2 c3 s^3) with s = sqrt(disc) / (2 |a2|) and a2 = 3 c3:
+        // -108 c3 |c3| p(xi) / disc^(3/2), one division. Dividing first keeps the product
+        // in range (the quotient is about p(xi) / c^3, the factor about c^2); an overflow or
+        // a vanishing disc^(3/2) gives a non-finite cosine, which takes no guesses below.
+        let c3 = p.c[3];
+        let cosine = (p.value(xi) / disc_three_halves) * (T::from_i32(-108) * c3 * c3.abs());
         // |cos 3 phi| > 1 means one real root (see `cardano_guess`). Just above 1 the formula
         // still places the real root well (two roots have merged into a complex pair near a
         // critical point), and rounding of a huge root spread lands here too: clamp. Cardano's
@@ -565,13 +582,11 @@ fn converged<T: Real>(p: &Cubic<T>, x: T, step: T, df: T) -> bool {
     if !(step.abs() <= next.abs() && step.abs() <= x.abs()) {
         return false;
     }
-    // Finite: |x - 2 step| <= 3 |x|, where the evaluation is safe (plain or rescaled).
-    let curvature = p
-        .curvature(x)
-        .abs()
-        .max(p.curvature(x - step * T::TWO).abs());
-    curvature * step * step <= (df * next).abs() * T::EPSILON
-        || step.abs() <= next.abs() * T::EPSILON
+    // p'' is linear with slope p''' = 2 d2, so over [x - 2 step, x] it is at most
+    // |p''(x)| + 2 |step| |p'''|: one evaluation instead of one at each end.
+    let size = step.abs();
+    let bend = size.mul_add(p.bend_rate, p.curvature(x).abs());
+    bend * size * size <= (df * next).abs() * T::EPSILON || size <= next.abs() * T::EPSILON
 }
 
 /// Newton steps taken from a trigonometric or Cardano guess before convergence is first
