@@ -23,7 +23,9 @@ fn cubics<T: Real>(family: &str) -> (Vec<[T; 4]>, T, T) {
         _ => None,
     };
     if let Some(f) = whole_line {
-        let c = (0..CUBICS).map(|_| f.sample::<T>(&mut rng).coeffs).collect();
+        let c = (0..CUBICS)
+            .map(|_| f.sample::<T>(&mut rng).coeffs)
+            .collect();
         return (c, T::NEG_INFINITY, T::INFINITY);
     }
     let c = (0..CUBICS)

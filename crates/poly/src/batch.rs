@@ -292,19 +292,25 @@ fn kernel<T: Real, L: Lanes<T>, const FIRST: bool>(
                 & plain_at(points[2])
                 & plain_at(points[3])));
 
-    let noise = L::splat(noise_factor::<T>());
     let values = points.map(value);
-    let mut near_zero = no_lane;
-    for i in 0..4 {
-        near_zero = near_zero | values[i].abs().le(noise * magnitude(points[i]));
-    }
+    // Whether |p| is within its rounding-error bound at a point (the scalar solver's
+    // `near_zero`), needed only for lanes outside the three-root fast path (`three_roots_fast`
+    // decides by the signs alone), so computed only when such a lane is left.
+    let near_zero = || {
+        let noise = L::splat(noise_factor::<T>());
+        let mut near = no_lane;
+        for i in 0..4 {
+            near = near | values[i].abs().le(noise * magnitude(points[i]));
+        }
+        near
+    };
     let positive = values.map(|v| v.gt(zero));
     let changes = [
         differ(positive[0], positive[1]),
         three_points & differ(positive[1], positive[2]),
         four_points & differ(positive[2], positive[3]),
     ];
-    let base = valid & fast & !near_zero;
+    let candidate = valid & fast;
 
     // Newton from the guess of each piece (`refine`'s fast path).
     let epsilon = L::splat(T::EPSILON);
@@ -324,7 +330,7 @@ fn kernel<T: Real, L: Lanes<T>, const FIRST: bool>(
     let mut roots = [zero; 3];
     for j in 0..3 {
         let (a, b) = (points[j], points[j + 1]);
-        let wanted = base & have_guesses & changes[j];
+        let wanted = candidate & have_guesses & changes[j];
         if wanted.bits() == 0 {
             continue;
         }
@@ -365,7 +371,7 @@ fn kernel<T: Real, L: Lanes<T>, const FIRST: bool>(
             | (!changes[0] & changes[1] & resolved(1))
             | (!changes[0] & !changes[1] & changes[2] & resolved(2))
             | (!changes[0] & !changes[1] & !changes[2]);
-        base & first_ok
+        candidate & !near_zero() & first_ok
     } else {
         // `three_roots_fast` accepts guesses outside their pieces when all three converge at
         // the first checked step; the piece-by-piece path needs each guess inside its piece.
@@ -376,10 +382,23 @@ fn kernel<T: Real, L: Lanes<T>, const FIRST: bool>(
             & first_step_converged[0]
             & first_step_converged[1]
             & first_step_converged[2];
+        // The scalar solver's three-root path: its sign changes are strict (a value of 0 has
+        // no sign there, while `positive` counts it as negative).
+        let nonzero = values[0].ne(zero) & values[1].ne(zero) & values[2].ne(zero);
+        let three_fast_taken = candidate & have_guesses & three_fast & nonzero & values[3].ne(zero);
+        let rest = candidate & !three_fast_taken;
+        let near = if rest.bits() == 0 {
+            no_lane
+        } else {
+            near_zero()
+        };
         let resolved = |j: usize| found[j] & (guess_inside[j] | three_fast) & have_guesses;
-        base & (!changes[0] | resolved(0))
+        let piece_by_piece = rest
+            & !near
+            & (!changes[0] | resolved(0))
             & (!changes[1] | resolved(1))
-            & (!changes[2] | resolved(2))
+            & (!changes[2] | resolved(2));
+        three_fast_taken | piece_by_piece
     };
     // Compaction in the lanes, so that each lane's answer is read from registers.
     let [r0, r1, r2] = roots;
