@@ -343,16 +343,28 @@ fn cubic_roots<T: Real, const FIRST: bool>(c: [T; 4], lo: T, hi: T) -> Roots<T> 
     {
         return roots;
     }
-    if fast {
-        // The rounding-error bounds, needed only past the three-root fast path (which decides
-        // by the signs alone).
-        let noise = noise_factor::<T>();
-        let bounds = points.map(|x| noise * p.magnitude(x));
-        residual = values.map(T::abs);
-        for i in 0..4 {
-            near_zero[i] = residual[i] <= bounds[i];
-        }
+    // The nearest root when the first piece changes sign: its guess alone, as `refine` starts
+    // (its first check, after the fixed steps); what does not converge there takes `refine`.
+    if FIRST
+        && changes(0)
+        && let Some(g) = guesses.for_piece(points[0], points[1])
+        && let Some(root) = first_root_fast(&p, points[0], points[1], g)
+    {
+        return Roots::from_slice(&[root]);
     }
+    if fast {
+        residual = values.map(T::abs);
+    }
+    // On the fast path the rounding-error bound at a point is formed only where the point's
+    // sign alone does not decide (no sign change on either side): the three-root path above
+    // and a piece whose ends change sign need none.
+    let within_rounding = |i: usize| {
+        if fast {
+            residual[i] <= noise_factor::<T>() * p.magnitude(points[i])
+        } else {
+            near_zero[i]
+        }
+    };
     let mut roots = Roots::none();
     let mut last_point: Option<usize> = None; // index of a point reported as a root just before
     for i in 0..n {
@@ -363,7 +375,7 @@ fn cubic_roots<T: Real, const FIRST: bool>(c: [T; 4], lo: T, hi: T) -> Roots<T> 
         // but a monotonic piece within rounding of zero) are one root: keep the smaller
         // residual.
         let stands_for_root =
-            near_zero[i] && (sign[i] == 0 || !(changes(i) || (i > 0 && changes(i - 1))));
+            (sign[i] == 0 || !(changes(i) || (i > 0 && changes(i - 1)))) && within_rounding(i);
         if stands_for_root {
             if let Some(j) = last_point.filter(|&j| j + 1 == i) {
                 if residual[i] < residual[j] {
@@ -621,6 +633,24 @@ fn three_roots_fast<T: Real>(p: &Cubic<T>, points: &[T; 4], guesses: [T; 3]) -> 
         ok &= x[i] > points[i] && x[i] < points[i + 1] && converged(p, before[i], step[i], df[i]);
     }
     ok.then(|| Roots::from_sorted(x))
+}
+
+/// [`refine`]'s fast path up to its first check: [`fixed_steps`] Newton steps from the guess
+/// `g` (inside the piece `(a, b)`), the result if it lies in the piece and has converged.
+#[inline(always)]
+fn first_root_fast<T: Real>(p: &Cubic<T>, a: T, b: T, g: T) -> Option<T> {
+    if !(g > a && g < b) {
+        return None;
+    }
+    let mut x = g;
+    let (mut before, mut step, mut df) = (x, T::ZERO, T::ZERO);
+    for _ in 0..fixed_steps::<T>() {
+        before = x;
+        df = p.slope(x);
+        step = p.value(x) / df;
+        x = before - step;
+    }
+    (x > a && x < b && converged(p, before, step, df)).then_some(x)
 }
 
 /// The single root in a monotonic piece `(a, b)` whose ends have opposite signs (`p(a) > 0`
