@@ -354,10 +354,18 @@ fn cubic_roots<T: Real, const FIRST: bool>(c: [T; 4], lo: T, hi: T) -> Roots<T> 
     }
     if fast {
         residual = values.map(T::abs);
+        if !FIRST {
+            // All points' bounds at once, as straight-line code: the loop below visits every
+            // point, and bounds formed point by point there measured slower (a branch per
+            // point on data that differs from solve to solve).
+            let noise = noise_factor::<T>();
+            for i in 0..4 {
+                near_zero[i] = residual[i] <= noise * p.magnitude(points[i]);
+            }
+        }
     }
-    // On the fast path the rounding-error bound at a point is formed only where the point's
-    // sign alone does not decide (no sign change on either side): the three-root path above
-    // and a piece whose ends change sign need none.
+    // The nearest root stops at its first root: there a point's bound is formed only where
+    // its sign alone does not decide (no sign change on either side).
     let within_rounding = |i: usize| {
         if fast {
             residual[i] <= noise_factor::<T>() * p.magnitude(points[i])
@@ -374,8 +382,12 @@ fn cubic_roots<T: Real, const FIRST: bool>(c: [T; 4], lo: T, hi: T) -> Roots<T> 
         // root is reported as its two roots. Two such points in a row (nothing between them
         // but a monotonic piece within rounding of zero) are one root: keep the smaller
         // residual.
-        let stands_for_root =
-            (sign[i] == 0 || !(changes(i) || (i > 0 && changes(i - 1)))) && within_rounding(i);
+        let undecided_by_signs = || sign[i] == 0 || !(changes(i) || (i > 0 && changes(i - 1)));
+        let stands_for_root = if FIRST {
+            undecided_by_signs() && within_rounding(i)
+        } else {
+            near_zero[i] && undecided_by_signs() // the cheaper test first
+        };
         if stands_for_root {
             if let Some(j) = last_point.filter(|&j| j + 1 == i) {
                 if residual[i] < residual[j] {
