@@ -990,19 +990,3 @@ mod tests {
     }
     cubic_tests!(f32, f64);
 }
-#[cfg(test)]
-mod debug_tmp {
-    #[test]
-    fn dup() {
-        let c = [
-            -1.0000030000019984f64,
-            3.000006000002002,
-            -3.0000030000000035,
-            1.0,
-        ];
-        let r = crate::solve_cubic_in(c, 1.000001411885023, 1.0000022360909497);
-        std::eprintln!("{:?}", r.as_slice());
-        let r = crate::solve_cubic(c);
-        std::eprintln!("whole {:?}", r.as_slice());
-    }
-}
