@@ -315,9 +315,8 @@ fn kernel<T: Real, L: Lanes<T>, const FIRST: bool>(
     // Newton from the guess of each piece (`refine`'s fast path).
     let epsilon = L::splat(T::EPSILON);
     let converged = |x: L, step: L, df: L| {
-        let next = x - step;
-        let small_step = step.abs().le(next.abs()) & step.abs().le(x.abs());
-        let size = step.abs();
+        let (next, size) = (x - step, step.abs());
+        let small_step = size.le(next.abs()) & size.le(x.abs());
         let bend = size.mul_add(bend_rate, curvature(x).abs());
         small_step
             & (((bend * size) * size).le((df * next).abs() * epsilon)

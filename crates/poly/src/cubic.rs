@@ -599,20 +599,19 @@ pub(crate) const FAST_STEPS: u32 = 3;
 /// Whether the Newton step `step` from `x` (slope `df`) lands on the root to within half an
 /// ulp. Quadratic convergence puts the error after the step near `|p''| step^2 / (2 |p'|)`,
 /// with `|p''|` bounded over `[x, x - 2 step]` (the step and as far again, where the root is
-/// once that error is small; `p''` is linear, so the bound is at an end); below half an ulp
+/// once that error is small) by `|p''(x)| + 2 |step| |p'''|` (`p''` is linear); below half an ulp
 /// of the result (or for a step below one ulp) no further step helps. Two more conditions:
 /// the step is no larger than the result, so `x - step` rounds with an error below one ulp
 /// instead of `u |x|` after a cancellation (a root much closer to 0 than the iterate); and no
 /// larger than `x`, so the step stays where a locally normalized evaluation at `x` is valid.
 #[inline(always)]
 fn converged<T: Real>(p: &Cubic<T>, x: T, step: T, df: T) -> bool {
-    let next = x - step;
-    if !(step.abs() <= next.abs() && step.abs() <= x.abs()) {
+    let (next, size) = (x - step, step.abs());
+    if !(size <= next.abs() && size <= x.abs()) {
         return false;
     }
     // p'' is linear with slope p''' = 2 d2, so over [x - 2 step, x] it is at most
     // |p''(x)| + 2 |step| |p'''|: one evaluation instead of one at each end.
-    let size = step.abs();
     let bend = size.mul_add(p.bend_rate, p.curvature(x).abs());
     bend * size * size <= (df * next).abs() * T::EPSILON || size <= next.abs() * T::EPSILON
 }
