@@ -6,6 +6,8 @@
 use alloc::vec::Vec;
 use nlrt_poly::{Real, Vector3};
 
+use crate::stack::SpillStack;
+
 /// An axis-aligned box `[lo, hi]`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Aabb<T> {
@@ -150,9 +152,10 @@ pub struct Bvh4<T> {
 /// input (e.g. exponentially spaced boxes, where SAH peels one box per level) gives a tree of
 /// depth at most `MEDIAN_AFTER_DEPTH + log2(n)`.
 const MEDIAN_AFTER_DEPTH: usize = 40;
-/// Traversal stack: a 4-ary node pushes at most 3 entries more than it pops, and the 4-ary
-/// depth is at most the binary depth (< 40 + 32).
-const STACK: usize = 3 * (MEDIAN_AFTER_DEPTH + 32) + 1;
+/// Inline entries of the traversal stack: a 4-ary node pushes at most 3 entries more than it
+/// pops, so this covers trees 10 levels deep (a million leaves); deeper walks (the builder
+/// bounds the depth by the binary depth, below `MEDIAN_AFTER_DEPTH + 32`) spill to the heap.
+const STACK: usize = 31;
 
 /// Nodes of at most this many primitives are split at the median instead of by SAH.
 const SMALL_NODE: usize = 8;
@@ -527,12 +530,9 @@ impl<T: Real> Bvh4<T> {
         if self.nodes.is_empty() {
             return t_max;
         }
-        let mut stack: [(u32, T); STACK] = [(0, T::ZERO); STACK];
-        let mut depth = 1;
-        stack[0] = (0, t_min);
-        while depth > 0 {
-            depth -= 1;
-            let (node, entry) = stack[depth];
+        let mut stack = SpillStack::<_, STACK>::new((0u32, T::ZERO));
+        stack.push((0, t_min));
+        while let Some((node, entry)) = stack.pop() {
             if entry > t_max {
                 continue;
             }
@@ -570,9 +570,7 @@ impl<T: Real> Bvh4<T> {
             }
             for &(t, c) in order[..n].iter().rev() {
                 if node.count[c] == 0 {
-                    debug_assert!(depth < stack.len());
-                    stack[depth] = (node.index[c], t);
-                    depth += 1;
+                    stack.push((node.index[c], t));
                 }
             }
         }

@@ -271,22 +271,26 @@ pub(crate) fn traverse_curve_cells<T: Real>(
                  stats: &mut TraversalStats|
      -> bool {
         let [a, b] = stretch.h;
-        // The stretch's ends and its crossings of the split lines, each with its window.
+        // The stretch's ends and its crossings of the split lines, each with its window, in
+        // increasing order (each line's crossings are; a tie keeps axis 0's first).
+        let no_cuts = ([(a, T::ZERO); 2], 0);
+        let [(x_cuts, kx), (y_cuts, ky)] = core::array::from_fn(|axis| {
+            lines[axis].map_or(no_cuts, |line| curve.crossings(axis, line, a, b))
+        });
         let mut cuts = [(a, T::ZERO); 6];
-        let mut m = 1;
-        for (axis, line) in lines.iter().enumerate() {
-            if let Some(line) = *line {
-                let (roots, k) = curve.crossings(axis, line, a, b);
-                for &r in &roots[..k] {
-                    cuts[m] = r;
-                    m += 1;
-                }
+        let (mut i, mut j, mut m) = (0, 0, 1);
+        while i < kx || j < ky {
+            if j == ky || (i < kx && !(y_cuts[j].0 < x_cuts[i].0)) {
+                cuts[m] = x_cuts[i];
+                i += 1;
+            } else {
+                cuts[m] = y_cuts[j];
+                j += 1;
             }
+            m += 1;
         }
         cuts[m] = (b, T::ZERO);
         m += 1;
-        let cuts = &mut cuts[..m];
-        cuts.sort_unstable_by(|p, q| p.0.partial_cmp(&q.0).unwrap_or(core::cmp::Ordering::Equal));
         for i in 0..m - 1 {
             let ((c0, w0), (c1, w1)) = (cuts[i], cuts[i + 1]);
             // Zero-length pieces lie on a cut; a stretch that is one point is one piece.
@@ -393,6 +397,7 @@ pub(crate) fn traverse_curve_cells<T: Real>(
             }
         }
     }
+    let mut found = [empty; STRETCHES_PER_NODE];
     while depth > 0 {
         depth -= 1;
         let node = stack[depth];
@@ -415,7 +420,6 @@ pub(crate) fn traverse_curve_cells<T: Real>(
             Some(cell(i64::from(x + 1) * half)),
             Some(cell(i64::from(y + 1) * half)),
         ];
-        let mut found = [empty; STRETCHES_PER_NODE];
         let mut n = 0;
         if !split(&node, lines, (level, x, y), &mut found, &mut n, stats) || depth + n > stack.len()
         {
@@ -542,9 +546,12 @@ pub(crate) fn texture_box_entry<T: Real>(
 /// prism, not per node of the walk).
 #[derive(Clone, Copy, Debug)]
 pub struct CellTriangle<T> {
-    /// Per edge: a point on it, its normal scaled by the side of the opposite corner;
-    /// `None` for an edge that cannot separate (degenerate triangle).
-    edges: [Option<([T; 2], [T; 2])>; 3],
+    /// Per edge: a point on it.
+    points: [[T; 2]; 3],
+    /// Per edge: its normal scaled by the side of the opposite corner (pointing inward), or
+    /// zero for an edge that cannot separate (degenerate triangle): a zero normal projects
+    /// every corner to exactly 0 with a zero bound, which neither separates nor contains.
+    normals: [[T; 2]; 3],
 }
 
 impl<T: Real> CellTriangle<T> {
@@ -552,19 +559,21 @@ impl<T: Real> CellTriangle<T> {
     #[must_use]
     pub fn new(tri: [[T; 2]; 3]) -> Self {
         let gamma5 = gamma5::<T>();
-        let edges = core::array::from_fn(|i| {
+        let normals = core::array::from_fn(|i| {
             let (a, b, c) = (tri[i], tri[(i + 1) % 3], tri[(i + 2) % 3]);
             let n = [a[1] - b[1], b[0] - a[0]];
             let (p0, p1) = (n[0] * (c[0] - a[0]), n[1] * (c[1] - a[1]));
             let side = p0 + p1;
             // Degenerate within rounding: this edge cannot separate.
             if !(side.abs() > gamma5 * (p0.abs() + p1.abs())) {
-                return None;
+                return [T::ZERO; 2];
             }
-            let n = if side > T::ZERO { n } else { [-n[0], -n[1]] };
-            Some((a, n))
+            if side > T::ZERO { n } else { [-n[0], -n[1]] }
         });
-        Self { edges }
+        Self {
+            points: tri,
+            normals,
+        }
     }
 
     /// Whether the axis-aligned square `[lo, hi]` may meet the triangle (separating axis
@@ -574,22 +583,20 @@ impl<T: Real> CellTriangle<T> {
     /// terms), so a square touching the triangle within rounding is kept. Degenerate
     /// triangles (a line or a point in uv) keep every square that the texel range allows
     /// along their degenerate direction.
+    ///
+    /// Per edge only one corner matters: the projection onto the edge's inward normal is
+    /// linear, so no point of the square projects beyond the corner farthest along the
+    /// normal (chosen by the normal's signs); when that corner is outside beyond its rounding
+    /// bound, the whole square is outside exactly.
     #[inline]
     #[must_use]
     pub fn meets_square(&self, lo: [T; 2], hi: [T; 2]) -> bool {
         let gamma5 = gamma5::<T>();
-        !self.edges.iter().flatten().any(|&(a, n)| {
-            [
-                [lo[0], lo[1]],
-                [hi[0], lo[1]],
-                [lo[0], hi[1]],
-                [hi[0], hi[1]],
-            ]
-            .iter()
-            .all(|corner| {
-                let (p0, p1) = (n[0] * (corner[0] - a[0]), n[1] * (corner[1] - a[1]));
-                p0 + p1 < -gamma5 * (p0.abs() + p1.abs())
-            })
+        !(0..3).any(|e| {
+            let (a, n) = (self.points[e], self.normals[e]);
+            let far = |k: usize| if n[k] > T::ZERO { hi[k] } else { lo[k] };
+            let (p0, p1) = (n[0] * (far(0) - a[0]), n[1] * (far(1) - a[1]));
+            p0 + p1 < -gamma5 * (p0.abs() + p1.abs())
         })
     }
 }

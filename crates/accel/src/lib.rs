@@ -50,6 +50,7 @@ mod object_edges;
 mod pose;
 mod seam;
 mod shell;
+mod stack;
 mod stats;
 mod tlas;
 

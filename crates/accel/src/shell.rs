@@ -16,6 +16,7 @@ use crate::cells::{CURVE_STACK, walk_cells};
 use crate::mesh::{BaseMesh, MeshError};
 use crate::object_edges::ObjectEdges;
 use crate::pose::{PoseUpdate, TlasUpdate};
+use crate::stack::SpillStack;
 use crate::stats::TraversalStats;
 use crate::tlas::{MAX_TEXEL_COORDINATE, PrismTlas, RootNodes, SetupError};
 
@@ -148,8 +149,9 @@ pub struct ShellSurface<T: Real> {
     object: ShellObject<T>,
 }
 
-/// Object-BVH stack (the BVH's depth is bounded by its builder: below 72).
-const OBJECT_STACK: usize = 3 * 72 + 4;
+/// Inline entries of the object-BVH stack: a 4-ary walk holds at most 3 per level, so this
+/// covers trees 10 levels deep (a million leaves); deeper walks spill to the heap.
+const OBJECT_STACK: usize = 31;
 
 impl<T: Real> ShellSurface<T> {
     /// Builds the surface: per base triangle its root tiles, and the TLAS.
@@ -299,17 +301,21 @@ impl<T: Real> ShellSurface<T> {
         }
         let (dx, dy) = (T::from_i32(x), T::from_i32(y));
         let ray = curve.ray();
-        let mut stack = [(0u32, T::ZERO); OBJECT_STACK];
-        let mut depth = 1;
-        stack[0] = (0, t_min);
-        while depth > 0 {
-            depth -= 1;
-            let (node, entry) = stack[depth];
+        // The curve's uv enclosure over a node's heights (the tile's for the root; for a box,
+        // the one its own test formed) holds the curve over its children's heights, which lie
+        // within them: a child whose uv rectangle misses it is rejected by four comparisons,
+        // before its own, tighter enclosure is formed (three divisions). Sound as the box
+        // test's rejection is (`TextureCurve::uv_enclosure`); a node whose enclosure does not
+        // exist (the denominator may vanish) hands down its parent's.
+        let tile_enclosure = curve.uv_enclosure(h_in, h_out);
+        let mut stack = SpillStack::<_, OBJECT_STACK>::new((0u32, T::ZERO, None));
+        stack.push((0, t_min, tile_enclosure));
+        while let Some((node, entry, node_enclosure)) = stack.pop() {
             if entry > *t_max {
                 continue;
             }
             let node = &nodes[node as usize];
-            let mut found: [(T, usize); 4] = [(T::ZERO, 0); 4];
+            let mut found: [(T, usize, Option<[T; 4]>); 4] = [(T::ZERO, 0, None); 4];
             let mut n = 0;
             for c in 0..4 {
                 if !Bvh4::is_used(node, c) {
@@ -319,17 +325,26 @@ impl<T: Real> ShellSurface<T> {
                 stats.box_tests += 1;
                 let lo = [b.lo[0] + dx, b.lo[1] + dy, b.lo[2].max(h_in)];
                 let hi = [b.hi[0] + dx, b.hi[1] + dy, b.hi[2].min(h_out)];
-                if let Some(span) = curve.box_span(lo, hi, t_min, *t_max) {
+                if let Some([u_lo, u_hi, v_lo, v_hi]) = node_enclosure
+                    && (u_hi < lo[0] || u_lo > hi[0] || v_hi < lo[1] || v_lo > hi[1])
+                {
+                    continue;
+                }
+                if !(lo[2] <= hi[2]) {
+                    continue;
+                }
+                let enclosure = curve.uv_enclosure(lo[2], hi[2]);
+                if let Some(span) = curve.box_span_in(enclosure, lo, hi, t_min, *t_max) {
                     let mut i = n;
                     while i > 0 && found[i - 1].0 > span.t_in {
                         found[i] = found[i - 1];
                         i -= 1;
                     }
-                    found[i] = (span.t_in, c);
+                    found[i] = (span.t_in, c, enclosure.or(node_enclosure));
                     n += 1;
                 }
             }
-            for &(t, c) in found[..n].iter() {
+            for &(t, c, _) in found[..n].iter() {
                 if node.count[c] > 0 && t <= *t_max {
                     let first = node.index[c] as usize;
                     for &k in &order[first..first + node.count[c] as usize] {
@@ -348,10 +363,9 @@ impl<T: Real> ShellSurface<T> {
                     }
                 }
             }
-            for &(t, c) in found[..n].iter().rev() {
+            for &(t, c, enclosure) in found[..n].iter().rev() {
                 if node.count[c] == 0 {
-                    stack[depth] = (node.index[c], t);
-                    depth += 1;
+                    stack.push((node.index[c], t, enclosure));
                 }
             }
         }

@@ -133,8 +133,22 @@ impl<'a, T: Real> TextureCurve<'a, T> {
     /// boxes tested along one curve, which set up their error bounds once).
     #[must_use]
     pub fn box_span(&self, lo: [T; 3], hi: [T; 3], t_min: T, t_max: T) -> Option<BoxSpan<T>> {
+        self.box_span_in(self.uv_enclosure(lo[2], hi[2]), lo, hi, t_min, t_max)
+    }
+
+    /// [`TextureCurve::box_span`] given the curve's uv enclosure over the box's heights
+    /// (`uv_enclosure(lo[2], hi[2])`, which a caller that also uses it computes once).
+    #[must_use]
+    pub fn box_span_in(
+        &self,
+        enclosure: Option<[T; 4]>,
+        lo: [T; 3],
+        hi: [T; 3],
+        t_min: T,
+        t_max: T,
+    ) -> Option<BoxSpan<T>> {
         let mut span: Option<BoxSpan<T>> = None;
-        self.box_pieces(lo, hi, t_min, t_max, |p| {
+        self.box_pieces_in(enclosure, lo, hi, t_min, t_max, |p| {
             let s = span.get_or_insert(p);
             s.h_in = s.h_in.min(p.h_in);
             s.h_out = s.h_out.max(p.h_out);
@@ -251,6 +265,24 @@ impl<'a, T: Real> TextureCurve<'a, T> {
         hi: [T; 3],
         t_min: T,
         t_max: T,
+        piece: impl FnMut(BoxSpan<T>),
+    ) {
+        if !(lo[2] <= hi[2]) {
+            return;
+        }
+        let enclosure = self.uv_enclosure(lo[2], hi[2]);
+        self.box_pieces_in(enclosure, lo, hi, t_min, t_max, piece);
+    }
+
+    /// [`TextureCurve::box_pieces`] given `enclosure`, the curve's uv enclosure over the
+    /// box's heights ([`TextureCurve::uv_enclosure`]`(lo[2], hi[2])`).
+    pub fn box_pieces_in(
+        &self,
+        enclosure: Option<[T; 4]>,
+        lo: [T; 3],
+        hi: [T; 3],
+        t_min: T,
+        t_max: T,
         mut piece: impl FnMut(BoxSpan<T>),
     ) {
         let (h_lo, h_hi) = (lo[2], hi[2]);
@@ -260,7 +292,6 @@ impl<'a, T: Real> TextureCurve<'a, T> {
         // Early rejection by interval arithmetic (see `uv_enclosure`): sound (never rejects
         // what the exact test keeps) and cheap; most boxes of a traversal are rejected here
         // without solving a quadratic.
-        let enclosure = self.uv_enclosure(h_lo, h_hi);
         if let Some([u_lo, u_hi, v_lo, v_hi]) = enclosure
             && (u_hi < lo[0] || u_lo > hi[0] || v_hi < lo[1] || v_lo > hi[1])
         {
