@@ -308,6 +308,12 @@ impl<'a, T: Real> TextureCurve<'a, T> {
         push(h_lo);
         push(h_hi);
         for (axis, face) in [(0, lo[0]), (0, hi[0]), (1, lo[1]), (1, hi[1])] {
+            // Nor a face outside the enclosure on its axis.
+            if let Some(e) = enclosure
+                && (face < e[2 * axis] || face > e[2 * axis + 1])
+            {
+                continue;
+            }
             let (q, mag) = self.line(axis, face);
             // A face the curve cannot reach on [h_lo, h_hi] has no root there to solve for.
             if !self.may_vanish(&q, mag, face, h_lo, h_hi) {
