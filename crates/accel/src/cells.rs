@@ -273,11 +273,12 @@ pub(crate) fn traverse_curve_cells<T: Real>(
         let [a, b] = stretch.h;
         // The stretch's ends and its crossings of the split lines, each with its window, in
         // increasing order (each line's crossings are; a tie keeps axis 0's first).
-        let no_cuts = ([(a, T::ZERO); 2], 0);
+        let no_cuts = ([(T::ZERO, T::ZERO); 2], 0);
         let [(x_cuts, kx), (y_cuts, ky)] = core::array::from_fn(|axis| {
             lines[axis].map_or(no_cuts, |line| curve.crossings(axis, line, a, b))
         });
-        let mut cuts = [(a, T::ZERO); 6];
+        let mut cuts = [(b, T::ZERO); 6];
+        cuts[0] = (a, T::ZERO);
         let (mut i, mut j, mut m) = (0, 0, 1);
         while i < kx || j < ky {
             if j == ky || (i < kx && !(y_cuts[j].0 < x_cuts[i].0)) {
@@ -289,7 +290,7 @@ pub(crate) fn traverse_curve_cells<T: Real>(
             }
             m += 1;
         }
-        cuts[m] = (b, T::ZERO);
+        // `cuts[m]` is the end `b`.
         m += 1;
         for i in 0..m - 1 {
             let ((c0, w0), (c1, w1)) = (cuts[i], cuts[i + 1]);
