@@ -7,7 +7,7 @@ use nlrt_poly::{Real, Vector2};
 use nlrt_shellmap::{BaseEdges, NonlinearRay, Prism, TextureCurve, intersect_box};
 
 use crate::stats::TraversalStats;
-use crate::tlas::RootNodes;
+use crate::tlas::{RootNodes, texel_floor};
 
 #[derive(Clone, Copy)]
 struct Pending<T> {
@@ -184,6 +184,14 @@ pub(crate) const CURVE_STACK: usize = 48;
 /// in the box test: a piece's ends at a crossing are widened by the crossing's error window,
 /// and a piece whose midpoint is within the rounding bound of a split line goes to both
 /// sides (a curve running along a texel edge).
+///
+/// A root node's stretch skips the levels that would not split it: where the curve's uv
+/// enclosure over the stretch's heights ([`TextureCurve::uv_enclosure`], rounding included)
+/// lies strictly inside the square of one descendant, the stretch goes straight to the
+/// deepest such, clipped to its height bounds (which lie within every ancestor's, so the
+/// levels between would have clipped nothing more). A big base triangle's roots are far
+/// coarser than the part of the map one ray's stretch crosses; below the roots the
+/// enclosure's two divisions per node cost more time than the levels they would skip.
 ///
 /// Order and culling: along a stretch the distance is monotonic in the height where the
 /// shell does not fold (a point of the ray has one height), so children are visited in
@@ -414,6 +422,31 @@ pub(crate) fn traverse_curve_cells<T: Real>(
             }
             continue;
         }
+        if node.level == root.level
+            && let Some((level, x, y)) = curve
+                .uv_enclosure(node.h[0], node.h[1])
+                .filter(|e| e[0] <= e[1] && e[2] <= e[3])
+                .and_then(|e| deepest_holding(node.level, node.x, node.y, e, cell_size))
+        {
+            // The stretch goes down whole: the walk would hand it to one child per level,
+            // clipped to each level's height bounds, of which the innermost are kept here.
+            if wanted(level, x, y) {
+                stats.box_tests += 1;
+                let [lo, hi] = node_heights(level, x, y);
+                let h = [node.h[0].max(lo), node.h[1].min(hi)];
+                if h[0] <= h[1] {
+                    stack[depth] = Stretch {
+                        level,
+                        x,
+                        y,
+                        h,
+                        ..node
+                    };
+                    depth += 1;
+                }
+            }
+            continue;
+        }
         let level = node.level - 1;
         let (x, y) = (node.x * 2, node.y * 2);
         let half = 1i64 << level;
@@ -432,6 +465,49 @@ pub(crate) fn traverse_curve_cells<T: Real>(
         }
     }
     true
+}
+
+/// The deepest node strictly below node `(level, x, y)` whose square holds the uv rectangle
+/// `[u_lo, u_hi] x [v_lo, v_hi]` (`cell_size`: the uv side of a cell) as far as it lies in the
+/// node's square: strictly inside the lines that bound it, except where they bound the node
+/// too, as the walk's own line values (`cell(c)`) decide; the corners' cells only propose it.
+/// `None` when a split line of the node itself meets the rectangle (or it is not a number).
+fn deepest_holding<T: Real>(
+    level: u32,
+    x: i32,
+    y: i32,
+    [u_lo, u_hi, v_lo, v_hi]: [T; 4],
+    cell_size: T,
+) -> Option<(u32, i32, i32)> {
+    let cell = |c: i64| T::from_f64(c as f64) * cell_size;
+    let k = 1i64 << level;
+    let (x0, y0) = (i64::from(x) * k, i64::from(y) * k);
+    let cell_units = T::ONE / cell_size;
+    // The cell of `w` clamped to the node's cells `start..start + k` (NaN: `start`).
+    let index = |w: T, start: i64| {
+        let c = (w * cell_units).to_f64();
+        if !(c >= (start + 1) as f64) {
+            start
+        } else if !(c < (start + k - 1) as f64) {
+            start + k - 1
+        } else {
+            i64::from(texel_floor(c))
+        }
+    };
+    let (ix, iy) = (index(u_lo, x0), index(v_lo, y0));
+    let spread = (ix ^ index(u_hi, x0)) | (iy ^ index(v_hi, y0));
+    let below = i64::BITS - spread.leading_zeros();
+    if below >= level {
+        return None;
+    }
+    let size = 1i64 << below;
+    let (cx, cy) = (ix >> below, iy >> below);
+    let between = |w_lo: T, w_hi: T, c: i64, start: i64| {
+        let (lo, hi) = (c * size, (c + 1) * size);
+        (lo == start || w_lo > cell(lo)) && (hi == start + k || w_hi < cell(hi))
+    };
+    (between(u_lo, u_hi, cx, x0) && between(v_lo, v_hi, cy, y0))
+        .then_some((below, cx as i32, cy as i32))
 }
 
 /// The nonlinear BLAS walk of one base triangle shared by displacement and shell mapping:
