@@ -276,7 +276,7 @@ impl<'a, T: Real> TextureCurve<'a, T> {
 
     /// [`TextureCurve::box_pieces`] given `enclosure`, the curve's uv enclosure over the
     /// box's heights ([`TextureCurve::uv_enclosure`]`(lo[2], hi[2])`).
-    pub fn box_pieces_in(
+    fn box_pieces_in(
         &self,
         enclosure: Option<[T; 4]>,
         lo: [T; 3],
