@@ -310,14 +310,11 @@ pub(crate) fn traverse_curve_cells<T: Real>(
             // stays on one side of each line (the inside of the node's square is then in one
             // child; what lies outside the square is never inside a child's).
             let mut sides = [[0u8, 0]; 2];
-            let uv = curve.uv_with_error((c0 + c1) * T::HALF);
+            let middle = (c0 + c1) * T::HALF;
             for (k, line) in lines.iter().enumerate() {
                 if let Some(line) = *line {
-                    sides[k] = match uv {
-                        Some((uv, e)) => [
-                            u8::from(uv[k] > line + e[k]),
-                            u8::from(uv[k] >= line - e[k]),
-                        ],
+                    sides[k] = match curve.side_of_line(k, line, middle) {
+                        Some(beyond) => [u8::from(beyond); 2],
                         None => [0, 1],
                     };
                 }

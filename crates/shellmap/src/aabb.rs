@@ -89,6 +89,35 @@ impl<'a, T: Real> TextureCurve<'a, T> {
         Some(([u, v], [eu, ev]))
     }
 
+    /// On which side of the line `u = c` (`axis` 0) or `v = c` (`axis` 1) the curve is at
+    /// height `h`: `Some(true)` beyond it (`u > c`), `Some(false)` before it, `None` where
+    /// rounding cannot tell (on the line within the bound, or `D(h)` within its own). The
+    /// sign of `u - c` is that of `(U - c D) D`: the line quadratic of
+    /// [`TextureCurve::crossings`] decided against the same `gamma(8)` bound, and `D`
+    /// against its evaluation bound, without the divisions of
+    /// [`TextureCurve::uv_with_error`].
+    #[must_use]
+    #[inline]
+    pub fn side_of_line(&self, axis: usize, c: T, h: T) -> Option<bool> {
+        let x = h.abs();
+        let d = quadratic(&self.ray.d, h);
+        let d_magnitude = quadratic(&self.md, x);
+        if !(d.abs() > self.gamma8 * d_magnitude) {
+            return None;
+        }
+        let (q, mag) = self.line(axis, c);
+        let margin = self.gamma8 * c.abs().mul_add(d_magnitude, quadratic(mag, x));
+        let value = quadratic(&q, h);
+        let signed = if d > T::ZERO { value } else { -value };
+        if signed > margin {
+            Some(true)
+        } else if signed < -margin {
+            Some(false)
+        } else {
+            None
+        }
+    }
+
     /// The distance along the world ray at height `h`; `None` where the denominator is 0.
     #[must_use]
     #[inline]
