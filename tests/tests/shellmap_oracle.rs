@@ -274,6 +274,85 @@ proptest! {
     }
 }
 
+proptest! {
+    // Lines within rounding of the curve are a small part of the offsets: enough cases that a
+    // bound left out is caught (with a zero margin this fails within the first 4,096).
+    #![proptest_config(common::proptest_config(4096, 50000))]
+
+    #[test]
+    fn side_of_line_agrees_with_exact_arithmetic(
+        r in prop::array::uniform24(-1.0f64..1.0),
+        o in prop::array::uniform3(-1.0f64..1.0),
+        h in 0.0f64..1.0,
+        axis in 0usize..2,
+        offset_exponent in -8i32..48,
+        negative in any::<bool>(),
+    ) {
+        side_of_line_check::<f64>(&r, o, h, axis, offset_exponent, negative)?;
+        side_of_line_check::<f32>(&r, o, h, axis, offset_exponent, negative)?;
+    }
+}
+
+/// [`TextureCurve::side_of_line`] at height `h` for a line `u = c` (or `v = c`) placed
+/// `2^offset_exponent` unit roundoffs (relative) to either side of the curve's computed
+/// coordinate there, from within rounding of it to far away: a decided side is the side of
+/// the exact curve (`U / D` evaluated in rationals), and a line `2^40` roundoffs away is
+/// decided.
+fn side_of_line_check<T: Real>(
+    r: &[f64; 24],
+    o: [f64; 3],
+    h: f64,
+    axis: usize,
+    offset_exponent: i32,
+    negative: bool,
+) -> Result<(), TestCaseError> {
+    let prism = sheared_prism::<T>(r);
+    let v = |x: f64, y: f64, z: f64| T::Vec3::new(T::from_f64(x), T::from_f64(y), T::from_f64(z));
+    let target = prism.shell_point(T::from_f64(0.3), T::from_f64(0.3), T::from_f64(0.5));
+    let origin = v(o[0] * 2.0, o[1] * 2.0, 1.5 + 3.0 * o[2].abs());
+    let Some(ray) = Ray::new(origin, target - origin) else {
+        return Ok(());
+    };
+    let nl = NonlinearRay::new(&prism, &ray);
+    let curve = TextureCurve::new(&prism, &nl);
+    let h = T::from_f64(h);
+    let Some((uv, _)) = curve.uv_with_error(h) else {
+        return Ok(());
+    };
+    let offset =
+        uv[axis].abs().max(T::ONE) * T::UNIT_ROUNDOFF * T::from_f64(2f64.powi(offset_exponent));
+    let c = if negative {
+        uv[axis] - offset
+    } else {
+        uv[axis] + offset
+    };
+    let side = curve.side_of_line(axis, c, h);
+    let exact = |p: &[T; 3]| ExactPoly::from_f64s(&p.map(|x| x.to_f64())).expect("finite");
+    let q = |x: T| Rational::from_f64(x.to_f64()).expect("finite");
+    let num = exact(if axis == 0 { &nl.u } else { &nl.v });
+    let d = exact(&nl.d).eval(&q(h));
+    if d.cmp0() == core::cmp::Ordering::Equal {
+        return Ok(());
+    }
+    let coordinate = num.eval(&q(h)) / &d;
+    if let Some(beyond) = side {
+        prop_assert_eq!(
+            beyond,
+            coordinate > q(c),
+            "{}: side {:?} of {} at h = {}, exact {}",
+            T::NAME,
+            side,
+            c,
+            h,
+            coordinate.to_f64()
+        );
+    }
+    if offset_exponent >= 40 {
+        prop_assert!(side.is_some(), "{}: a line far away undecided", T::NAME);
+    }
+    Ok(())
+}
+
 /// A sheared prism for the enclosure: normals tilted by up to 0.5, uvs a distorted triangle
 /// away from the origin (so `u` and `D` vary together, the case the centred form is for).
 fn sheared_prism<T: Real>(r: &[f64; 24]) -> Prism<T> {
