@@ -687,6 +687,77 @@ fn gamma5<T: Real>() -> T {
 mod tests {
     use super::*;
 
+    /// The jump target of a root stretch: the deepest node whose square holds the rectangle
+    /// (nothing between it and the rectangle's sides but the node's own boundary), and none
+    /// where a split line of the node itself meets the rectangle or it is not a number.
+    #[test]
+    fn the_jump_goes_to_the_deepest_node_holding_the_rectangle() {
+        let cell_size = 1.0 / 256.0;
+        let cell = |c: i64| c as f64 * cell_size;
+        let (level, x, y) = (6u32, 1i32, 2i32);
+        let (x0, y0, k) = (64i64, 128i64, 64i64);
+        let mut s = 7u64;
+        let mut r = move || {
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (s >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let (mut jumps, mut deep) = (0, 0);
+        for _ in 0..20_000 {
+            // A rectangle inside the node, of a random size from a cell's fraction to the node.
+            let size = cell(k) * 2f64.powf(-10.0 * r());
+            let (u_lo, v_lo) = (
+                cell(x0) + r() * (cell(k) - size),
+                cell(y0) + r() * (cell(k) - size),
+            );
+            let e = [u_lo, u_lo + size * r(), v_lo, v_lo + size * r()];
+            match deepest_holding(level, x, y, e, cell_size) {
+                Some((l, cx, cy)) => {
+                    jumps += 1;
+                    assert!(l < level, "{e:?}");
+                    let n = 1i64 << l;
+                    let (a, b) = (i64::from(cx) * n, i64::from(cy) * n);
+                    assert!(
+                        (x0..x0 + k).contains(&a) && (y0..y0 + k).contains(&b),
+                        "{e:?}"
+                    );
+                    assert!(
+                        e[0] >= cell(a) && e[1] <= cell(a + n),
+                        "{e:?} in {l} {cx} {cy}"
+                    );
+                    assert!(
+                        e[2] >= cell(b) && e[3] <= cell(b + n),
+                        "{e:?} in {l} {cx} {cy}"
+                    );
+                    if l > 0 {
+                        // Deepest: one of the target's own split lines meets the rectangle.
+                        let (mu, mv) = (cell(a + n / 2), cell(b + n / 2));
+                        assert!(
+                            (e[0] <= mu && mu <= e[1]) || (e[2] <= mv && mv <= e[3]),
+                            "{e:?}: {l} {cx} {cy} is not the deepest"
+                        );
+                    } else {
+                        deep += 1;
+                    }
+                }
+                None => {
+                    let (mu, mv) = (cell(x0 + k / 2), cell(y0 + k / 2));
+                    assert!(
+                        (e[0] <= mu && mu <= e[1]) || (e[2] <= mv && mv <= e[3]),
+                        "{e:?}: a jump was possible"
+                    );
+                }
+            }
+        }
+        assert!(
+            jumps > 10_000 && deep > 100,
+            "{jumps} jumps, {deep} to a cell"
+        );
+        let nan = [f64::NAN, f64::NAN, cell(y0), cell(y0) + 0.001];
+        assert_eq!(deepest_holding(level, x, y, nan, cell_size), None);
+    }
+
     /// The uv-triangle test of the walk keeps every square that holds a point of the
     /// triangle (sampled on a fine grid, squares touching it included) and drops squares
     /// clearly apart from it; a degenerate triangle (a segment) drops nothing that the
