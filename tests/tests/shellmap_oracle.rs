@@ -307,13 +307,9 @@ fn side_of_line_check<T: Real>(
     negative: bool,
 ) -> Result<(), TestCaseError> {
     let prism = sheared_prism::<T>(r);
-    let v = |x: f64, y: f64, z: f64| T::Vec3::new(T::from_f64(x), T::from_f64(y), T::from_f64(z));
-    let target = prism.shell_point(T::from_f64(0.3), T::from_f64(0.3), T::from_f64(0.5));
-    let origin = v(o[0] * 2.0, o[1] * 2.0, 1.5 + 3.0 * o[2].abs());
-    let Some(ray) = Ray::new(origin, target - origin) else {
+    let Some(nl) = ray_from_above(&prism, o) else {
         return Ok(());
     };
-    let nl = NonlinearRay::new(&prism, &ray);
     let curve = TextureCurve::new(&prism, &nl);
     let h = T::from_f64(h);
     let Some((uv, _)) = curve.uv_with_error(h) else {
@@ -377,6 +373,16 @@ fn sheared_prism<T: Real>(r: &[f64; 24]) -> Prism<T> {
     )
 }
 
+/// The nonlinear ray in `prism` of a ray from above it (origin from `o`, each in `[-1, 1]`)
+/// through a point inside it; `None` for a degenerate direction.
+fn ray_from_above<T: Real>(prism: &Prism<T>, o: [f64; 3]) -> Option<NonlinearRay<T>> {
+    let v = |x: f64, y: f64, z: f64| T::Vec3::new(T::from_f64(x), T::from_f64(y), T::from_f64(z));
+    let target = prism.shell_point(T::from_f64(0.3), T::from_f64(0.3), T::from_f64(0.5));
+    let origin = v(o[0] * 2.0, o[1] * 2.0, 1.5 + 3.0 * o[2].abs());
+    let ray = Ray::new(origin, target - origin)?;
+    Some(NonlinearRay::new(prism, &ray))
+}
+
 /// [`TextureCurve::uv_enclosure`] over `[a, b]` (random ends in `[0, 1]`, the interval then
 /// shrunk by `2^shrink` towards `a`, down to the short stretches of a walk's deep nodes) holds
 /// the curve of the ray's quadratics, `U(h) / D(h)` and `V(h) / D(h)` evaluated exactly
@@ -388,13 +394,9 @@ fn uv_enclosure_check<T: Real>(
     shrink: i32,
 ) -> Result<(), TestCaseError> {
     let prism = sheared_prism::<T>(r);
-    let v = |x: f64, y: f64, z: f64| T::Vec3::new(T::from_f64(x), T::from_f64(y), T::from_f64(z));
-    let target = prism.shell_point(T::from_f64(0.3), T::from_f64(0.3), T::from_f64(0.5));
-    let origin = v(o[0] * 2.0, o[1] * 2.0, 1.5 + 3.0 * o[2].abs());
-    let Some(ray) = Ray::new(origin, target - origin) else {
+    let Some(nl) = ray_from_above(&prism, o) else {
         return Ok(());
     };
-    let nl = NonlinearRay::new(&prism, &ray);
     let curve = TextureCurve::new(&prism, &nl);
     let a = ends[0].min(ends[1]);
     let b = a + (ends[0] - ends[1]).abs() * 2f64.powi(-shrink);
