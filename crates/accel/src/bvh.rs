@@ -694,13 +694,7 @@ mod tests {
     use nlrt_poly::glam::DVec3;
 
     fn boxes(n: usize) -> Vec<Aabb<f64>> {
-        let mut s = 12345u64;
-        let mut r = move || {
-            s = s
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (s >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut r = crate::test_util::unit_randoms(12345);
         (0..n)
             .map(|_| {
                 let c = DVec3::new(r(), r(), r()) * 10.0;

@@ -696,13 +696,7 @@ mod tests {
         let cell = |c: i64| c as f64 * cell_size;
         let (level, x, y) = (6u32, 1i32, 2i32);
         let (x0, y0, k) = (64i64, 128i64, 64i64);
-        let mut s = 7u64;
-        let mut r = move || {
-            s = s
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (s >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut r = crate::test_util::unit_randoms(7);
         let (mut jumps, mut deep) = (0, 0);
         for _ in 0..20_000 {
             // A rectangle inside the node, of a random size from a cell's fraction to the node.

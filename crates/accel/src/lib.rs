@@ -52,6 +52,8 @@ mod seam;
 mod shell;
 mod stack;
 mod stats;
+#[cfg(test)]
+mod test_util;
 mod tlas;
 
 pub use bvh::{ARITY, Aabb, Bvh4, Node4, SlabRay, ray_triangle, sah_lower_bound};
