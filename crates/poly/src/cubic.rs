@@ -698,6 +698,7 @@ fn refine<T: Real>(
         // accepted once it converged inside the bracket; anything else falls through to the
         // safeguarded iteration.
         let mut x = g;
+        let (mut before, mut last_step, mut step_before_last) = (x, T::INFINITY, T::INFINITY);
         for k in 0..FAST_STEPS {
             let df = p.slope(x);
             let step = p.value(x) / df;
@@ -711,10 +712,24 @@ fn refine<T: Real>(
                     return Some(next);
                 }
             }
+            (before, step_before_last, last_step) = (x, last_step, step);
             x = next;
         }
-        if start.is_none() && x > a && x < b {
-            start = Some(x);
+        if x > a && x < b {
+            // Not converged: at a multiple root or a cluster of roots inside the noise, the
+            // iterate is already as good as the safeguarded iteration would make it.
+            // (`before` may be the unconditional first step's result, outside the piece.)
+            if last_step.abs() * linear_ratio::<T>() > step_before_last.abs()
+                && last_step.abs() <= before.abs() * T::pow2(cluster_width_exponent::<T>())
+                && before > a
+                && before < b
+                && within_noise(p, before)
+            {
+                return Some(before);
+            }
+            if start.is_none() {
+                start = Some((x, last_step));
+            }
         }
     }
     let (mut a, mut b) = (a, b);
@@ -750,11 +765,22 @@ fn refine<T: Real>(
 
 /// Newton with a bracket that shrinks at every step, bisection when Newton leaves it or
 /// stalls, and local normalization wherever plain evaluation is not safe.
-fn safeguarded_newton<T: Real>(p: &Cubic<T>, a: T, b: T, a_positive: bool, start: Option<T>) -> T {
+///
+/// `start` is where a fast path left off, with the Newton step that led there (it tells
+/// whether the steps still shrink quadratically).
+fn safeguarded_newton<T: Real>(
+    p: &Cubic<T>,
+    a: T,
+    b: T,
+    a_positive: bool,
+    start: Option<(T, T)>,
+) -> T {
     let (mut lo, mut hi) = (a, b);
     // -c2 / (3 c3) without overflow.
     let inflection = -(p.c[2] / p.c[3]) / T::THREE;
-    let start = if let Some(x) = start.filter(|&x| x > lo && x < hi) {
+    let mut previous_step = T::INFINITY;
+    let start = if let Some((x, step)) = start.filter(|&(x, _)| x > lo && x < hi) {
+        previous_step = step;
         x
     } else if inflection > lo && inflection < hi {
         // Fourier's condition: Newton started where p * p'' > 0 converges monotonically.
@@ -828,9 +854,16 @@ fn safeguarded_newton<T: Real>(p: &Cubic<T>, a: T, b: T, a_positive: bool, start
             && newton < hi
             && step.abs() * T::TWO <= step_before_last.abs()
             && slow_steps < 2;
+        // Within the rounding noise and converging only linearly: a multiple root or a
+        // cluster of roots inside the noise, where the steps only wander through the noise.
+        // `x` is as good as the conditioning allows (the contract's attainable radius).
+        if near_zero && step.abs() * linear_ratio::<T>() > previous_step.abs() {
+            return x;
+        }
         step_before_last = last_step;
         let next = if accept {
             last_step = step;
+            previous_step = step;
             if converges {
                 return newton;
             }
@@ -843,6 +876,7 @@ fn safeguarded_newton<T: Real>(p: &Cubic<T>, a: T, b: T, a_positive: bool, start
                 return x;
             }
             last_step = hi - lo;
+            previous_step = last_step;
             slow_steps = 0;
             midpoint(lo, hi)
         };
@@ -852,6 +886,33 @@ fn safeguarded_newton<T: Real>(p: &Cubic<T>, a: T, b: T, a_positive: bool, start
         x = next;
     }
     x
+}
+
+/// Once Newton converges quadratically its steps shrink by far more than this factor per
+/// step; a step larger than `1 / linear_ratio` of the one before means linear convergence, the
+/// mark of a multiple root (ratio `(m - 1) / m` for multiplicity `m`: 1/2, 2/3) or of a
+/// cluster of roots inside the rounding noise, where the computed steps are noise.
+#[inline(always)]
+fn linear_ratio<T: Real>() -> T {
+    T::from_i32(4)
+}
+
+/// Newton's steps inside a cluster of roots within the rounding noise are no wider than the
+/// cluster's pseudo-zero set: for three roots, where it is widest, `|x - r|^3 |c3| <= 6 u
+/// sum |c_i| |x|^i`, about `(48 u)^(1/3) |x| < 2^(2 - p/3) |x|` for `p` mantissa bits (the
+/// sum is at most `8 |c3| |x|^3` near a cluster at `x`). One more bit of margin gives the
+/// exponent; a larger step is not noise, and the safeguarded iteration takes it.
+#[inline(always)]
+fn cluster_width_exponent<T: Real>() -> i32 {
+    3 - T::MANTISSA_DIGITS as i32 / 3
+}
+
+/// Whether `|p(x)|` is within its rounding-error bound (plain evaluation only). Out of line:
+/// only solves whose fast path did not converge ask.
+#[cold]
+#[inline(never)]
+fn within_noise<T: Real>(p: &Cubic<T>, x: T) -> bool {
+    p.plain_at(x) && p.value(x).abs() <= noise_factor::<T>() * p.magnitude(x)
 }
 
 /// One evaluation of the safeguarded iteration: the value, whether it is within its
