@@ -150,15 +150,18 @@ impl<T: Real> Cubic<T> {
         self.moderate && ax <= T::pow2(r) && (self.tiny_safe || ax >= T::pow2(-r) || ax == T::ZERO)
     }
 
+    /// [`Self::plain_on`] without the critical points: the coefficients and the ends only.
+    #[inline(always)]
+    fn plain_interval(&self, lo: T, hi: T) -> bool {
+        let top = T::pow2(safe_argument_exponent::<T>());
+        self.moderate && lo >= -top && hi <= top
+    }
+
     /// [`Self::plain_at`] for every point of `[lo, hi]` at once (the upper bound only needs the
     /// ends).
     #[inline(always)]
     fn plain_on(&self, lo: T, hi: T, points: &[T; 4]) -> bool {
-        let top = T::pow2(safe_argument_exponent::<T>());
-        self.moderate
-            && lo >= -top
-            && hi <= top
-            && (self.tiny_safe || points.iter().all(|&x| self.plain_at(x)))
+        self.plain_interval(lo, hi) && (self.tiny_safe || points.iter().all(|&x| self.plain_at(x)))
     }
 
     /// `p(x)` and its rounding-error bound, both possibly scaled by one positive power of two
@@ -286,6 +289,12 @@ fn cubic_roots<T: Real, const FIRST: bool>(c: [T; 4], lo: T, hi: T) -> Roots<T> 
         return Roots::none();
     }
 
+    // Narrow types hand what they cannot evaluate plainly to f64 (see `solve_in_f64`).
+    let widen = T::MANTISSA_DIGITS < f64::MANTISSA_DIGITS;
+    if widen && !p.plain_interval(lo, hi) {
+        return solve_in_f64::<T, FIRST>(c, lo, hi);
+    }
+
     // Critical points split [lo, hi] into at most three monotonic pieces.
     let (critical, early_guesses) = if p.moderate {
         p.critical_points_and_guesses()
@@ -310,6 +319,9 @@ fn cubic_roots<T: Real, const FIRST: bool>(c: [T; 4], lo: T, hi: T) -> Roots<T> 
     let mut residual = [T::ZERO; 4];
     let mut values = [T::ZERO; 4];
     let fast = p.plain_on(lo, hi, &points);
+    if widen && !fast {
+        return solve_in_f64::<T, FIRST>(c, lo, hi);
+    }
     if fast {
         // Moderate input (the ray tracer's case): straight-line code over all four slots.
         values = points.map(|x| p.value(x));
@@ -419,6 +431,37 @@ fn cubic_roots<T: Real, const FIRST: bool>(c: [T; 4], lo: T, hi: T) -> Roots<T> 
             }
             if FIRST {
                 return roots;
+            }
+        }
+    }
+    roots
+}
+
+/// The roots of a narrow-type cubic that plain evaluation in its own type cannot serve (roots
+/// beyond `2^15` in f32, coefficients outside `2^-31 .. 2^31`, tiny critical points with
+/// `c0 = 0`), found in f64 and rounded to the nearest `T`.
+///
+/// f64 holds every f32 cubic exactly, and evaluates it plainly wherever its roots lie within
+/// `2^127` (f32's coefficients lie inside f64's moderate window), where f32 would rescale the
+/// variable at every evaluation and bisect across binades: this is faster, and more accurate:
+/// each root is the nearest f32 to a root found to f64 precision. Rounding is monotonic, so a
+/// root in `[lo, hi]` stays there (the ends are `T` values); roots that round together are
+/// reported once, and one beyond `T`'s range is dropped, as the contract says.
+#[inline(never)]
+fn solve_in_f64<T: Real, const FIRST: bool>(c: [T; 4], lo: T, hi: T) -> Roots<T> {
+    let (c, lo, hi) = (c.map(T::to_f64), lo.to_f64(), hi.to_f64());
+    let mut wide = cubic_roots::<f64, FIRST>(c, lo, hi);
+    if FIRST && wide.first().is_some_and(|&r| !T::from_f64(r).is_finite()) {
+        // The nearest root lies beyond T's range: the first representable one is wanted.
+        wide = cubic_roots::<f64, false>(c, lo, hi);
+    }
+    let mut roots = Roots::none();
+    for &r in wide.iter() {
+        let x = T::from_f64(r);
+        if x.is_finite() && roots.last().is_none_or(|&last| x > last) {
+            roots.push(x);
+            if FIRST {
+                break;
             }
         }
     }
@@ -1049,4 +1092,35 @@ mod tests {
         )*};
     }
     cubic_tests!(f32, f64);
+
+    /// f32 cubics outside f32's plain window are solved in f64 (`solve_in_f64`).
+    mod narrow {
+        use crate::{first_cubic_root_in, solve_cubic, solve_cubic_in};
+
+        #[test]
+        fn roots_beyond_the_plain_window_are_exact_when_representable() {
+            // (x - 2^20)(x - 3 2^20)(x + 5 2^21): every coefficient is exact in f32, the roots
+            // lie beyond 2^15, where f32 alone would rescale at every evaluation.
+            let e20 = 1_048_576.0f32;
+            let c = [30.0 * e20 * e20 * e20, -37.0 * e20 * e20, 6.0 * e20, 1.0];
+            let r = solve_cubic(c);
+            assert_eq!(r.as_slice(), &[-5.0 * 2.0 * e20, e20, 3.0 * e20]);
+            assert_eq!(first_cubic_root_in(c, 0.0, f32::INFINITY), Some(e20));
+            let inside = solve_cubic_in(c, 2.0 * e20, 4.0 * e20);
+            assert_eq!(inside.as_slice(), &[3.0 * e20]);
+        }
+
+        #[test]
+        fn the_nearest_root_skips_one_beyond_the_range() {
+            // 90 x^2 + 1.6e-43 x^3: a double root at 0 and one near -5.5e44, beyond f32's
+            // range (dropped) but found first in f64 (a fuzzing find).
+            let c = [0.0f32, 0.0, 90.0, 1.64e-43];
+            let all = solve_cubic(c);
+            assert_eq!(all.as_slice(), &[0.0]);
+            assert_eq!(
+                first_cubic_root_in(c, f32::NEG_INFINITY, f32::INFINITY),
+                Some(0.0)
+            );
+        }
+    }
 }
