@@ -289,12 +289,6 @@ fn cubic_roots<T: Real, const FIRST: bool>(c: [T; 4], lo: T, hi: T) -> Roots<T> 
         return Roots::none();
     }
 
-    // Narrow types hand what they cannot evaluate plainly to f64 (see `solve_in_f64`).
-    let widen = T::MANTISSA_DIGITS < f64::MANTISSA_DIGITS;
-    if widen && !p.plain_interval(lo, hi) {
-        return solve_in_f64::<T, FIRST>(c, lo, hi);
-    }
-
     // Critical points split [lo, hi] into at most three monotonic pieces.
     let (critical, early_guesses) = if p.moderate {
         p.critical_points_and_guesses()
@@ -319,13 +313,16 @@ fn cubic_roots<T: Real, const FIRST: bool>(c: [T; 4], lo: T, hi: T) -> Roots<T> 
     let mut residual = [T::ZERO; 4];
     let mut values = [T::ZERO; 4];
     let fast = p.plain_on(lo, hi, &points);
-    if widen && !fast {
-        return solve_in_f64::<T, FIRST>(c, lo, hi);
-    }
     if fast {
         // Moderate input (the ray tracer's case): straight-line code over all four slots.
         values = points.map(|x| p.value(x));
         sign = values.map(sign_of);
+    } else if T::MANTISSA_DIGITS < f64::MANTISSA_DIGITS {
+        // A narrow type hands what it cannot evaluate plainly to f64 (see `solve_in_f64`).
+        // Deciding here, after the critical points, rather than before them: an earlier exit
+        // measured 20 ns slower on the plain three-root path (46 -> 67 ns in criterion, f32),
+        // where it is never taken.
+        return solve_in_f64::<T, FIRST>(c, lo, hi);
     } else {
         let leading: i8 = if p.c[3] > T::ZERO { 1 } else { -1 };
         for i in 0..n {
@@ -447,6 +444,7 @@ fn cubic_roots<T: Real, const FIRST: bool>(c: [T; 4], lo: T, hi: T) -> Roots<T> 
 /// each root is the nearest f32 to a root found to f64 precision. Rounding is monotonic, so a
 /// root in `[lo, hi]` stays there (the ends are `T` values); roots that round together are
 /// reported once, and one beyond `T`'s range is dropped, as the contract says.
+#[cold]
 #[inline(never)]
 fn solve_in_f64<T: Real, const FIRST: bool>(c: [T; 4], lo: T, hi: T) -> Roots<T> {
     let (c, lo, hi) = (c.map(T::to_f64), lo.to_f64(), hi.to_f64());
