@@ -368,14 +368,14 @@ fn builtin_list() -> String {
 }
 
 /// The built-in displacement scenes `nlrt watertight` is meant for, each once: the judged
-/// ones, the ghost-hit tori, the seam scenes, the thin-hair fur and the cylinder.
+/// ones, the ghost-hit tori, the seam scenes, the cone fur and the cylinder.
 fn judged_scene_names() -> Vec<&'static str> {
     let mut names: Vec<&'static str> = Vec::new();
     for name in scenes::WATERTIGHT_SCENES
         .iter()
         .chain(scenes::GHOST_SCENES.iter())
         .chain(scenes::SEAM_SCENES.iter())
-        .chain(["fur-hair", "cylinder"].iter())
+        .chain(["fur-cones", "cylinder"].iter())
         .chain(["scales", "feathers", "cornell", "highpoly", "fig9"].iter())
     {
         if !names.contains(name) {

@@ -120,13 +120,13 @@ pub const GHOST_SCENES: [&str; 3] = ["torus-spikes", "torus-tilted", "torus-twis
 pub const SEAM_SCENES: [&str; 2] = ["seam-cube", "seam-sphere"];
 
 /// Built-in scene variants made for one measurement, not part of the default report's
-/// renders: `mountain-grazing` (the mountain seen at grazing angles), `fur-hair` (the fur
-/// with the paper's thin hairs, [`fur_hair`]), `fig9-displaced` (Fig.
+/// renders: `mountain-grazing` (the mountain seen at grazing angles), `fur-cones` (the fur's
+/// torus under broad cones, [`fur_cones`]), `fig9-displaced` (Fig.
 /// 9's columns with a height map), the ghost-hit tori ([`ghost_torus`]) and the seam scenes
 /// ([`SEAM_SCENES`]), for `nlrt watertight`, and usable everywhere a scene is.
 pub const VARIANT_NAMES: [&str; 8] = [
     "mountain-grazing",
-    "fur-hair",
+    "fur-cones",
     "fig9-displaced",
     "torus-spikes",
     "torus-tilted",
@@ -158,7 +158,7 @@ pub fn builtin(name: &str, size: Size) -> Option<Scene> {
         "mountain" => Some(mountain(if big { 4096 } else { 1024 })),
         "cylinder" => Some(cylinder(if big { 4096 } else { 1024 })),
         "fur" => Some(fur(if big { 256 } else { 64 })),
-        "fur-hair" => Some(fur_hair(if big { 256 } else { 64 })),
+        "fur-cones" => Some(fur_cones(if big { 256 } else { 64 })),
         "torus" => Some(torus_scene(if big { 1024 } else { 256 })),
         "mountain-grazing" => {
             // The watertightness view of the mountain: just above the shell's top, over the
@@ -375,26 +375,29 @@ pub fn cylinder(side: usize) -> Scene {
     }
 }
 
-/// The fur the paper measured: the torus of [`fur`] under thin hairs, one cone of radius
-/// 1.5 texels (at every map size) per 4 x 4 texels, so each hair is a few texels wide and,
-/// at the fur's height scale, 9 (small) to 37 (paper size) times taller than wide; their
-/// microtriangles are long and steep, with world boxes far larger than their area.
+/// (c) Torus fur, the kind the paper measured: 8,192 base triangles (64 x 64 quads) under
+/// thin hairs, one cone of radius 1.5 texels (at every map size) per 4 x 4 texels, so each
+/// hair is a few texels wide and, at the fur's height scale, 9 (small) to 37 (paper size)
+/// times taller than wide; their microtriangles are long and steep, with world boxes far
+/// larger than their area (what makes the paper's pre-tessellated fur slow).
 #[must_use]
-pub fn fur_hair(side: usize) -> Scene {
+pub fn fur(side: usize) -> Scene {
     // A hair's radius in texels: below 2 texels a cone is a single peak of samples.
     const HAIR_RADIUS: f64 = 1.5;
-    let mut scene = fur(side);
-    scene.name = "fur-hair";
+    let mut scene = fur_cones(side);
+    scene.name = "fur";
     scene.content = Content::Displacement(field(side, &spike_map(side, side / 4, HAIR_RADIUS, 5)));
     scene
 }
 
-/// (c) Torus fur: 8,192 base triangles (64 x 64 quads), a spike map tiled 8 x 8.
+/// The torus of [`fur`] under broad, overlapping cones (radius `side / 24` texels on a grid
+/// of `side / 8`, tiled 8 x 8): spikes about as wide as tall, whose microtriangles are not
+/// long and thin, so pre-tessellation handles them as well as a mountain.
 #[must_use]
-pub fn fur(side: usize) -> Scene {
+pub fn fur_cones(side: usize) -> Scene {
     let (positions, normals, uvs, triangles) = torus(64, 1.0, 0.35);
     Scene {
-        name: "fur",
+        name: "fur-cones",
         positions,
         normals,
         uvs,

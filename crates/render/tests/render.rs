@@ -62,7 +62,7 @@ fn curved_scenes_agree_with_the_reference_on_most_pixels() {
     for scene in [
         scenes::cylinder(64),
         scenes::fur(32),
-        scenes::fur_hair(32),
+        scenes::fur_cones(32),
         scenes::scales(),
         scenes::feathers(),
         scenes::highpoly(16),
@@ -368,7 +368,7 @@ fn seams_are_closed_by_the_rule_and_leak_without_it() {
     }
 }
 
-/// A ray of `fur-hair` (pixel (948.5, 657.5) of `watertight`'s 1000 x 1000 grid) that, in
+/// A ray of `fur` (pixel (948.5, 657.5) of `watertight`'s 1000 x 1000 grid) that, in
 /// f32, descends onto a texel edge whose two corners are at height 0 and reaches it exactly at
 /// the base: the surface touches the base there, and the cubic's value at the piece's end is 0
 /// up to the rounding of its coefficients, so no sign change shows. It must hit at the base
@@ -378,7 +378,7 @@ fn seams_are_closed_by_the_rule_and_leak_without_it() {
 fn a_ray_touching_the_base_at_a_zero_texel_edge_hits_there() {
     use nlrt_accel::TraversalStats;
     use nlrt_poly::glam::Vec3;
-    let scene = scenes::builtin("fur-hair", scenes::Size::Small).unwrap();
+    let scene = scenes::builtin("fur", scenes::Size::Small).unwrap();
     let surface = scene.displaced_surface::<f32>().unwrap();
     let d = scene.camera.direction(948.5 / 1000.0, 657.5 / 1000.0, 1.0);
     let v = |a: nlrt_poly::glam::DVec3| Vec3::new(a.x as f32, a.y as f32, a.z as f32);
