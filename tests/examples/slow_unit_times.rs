@@ -1,0 +1,71 @@
+//! Times one displacement slow unit (`fuzz/slow/displacement_<f32|f64>/<unit>`) on nonlinear
+//! tracing and on the compared methods the fuzz target runs, with the walk's counters:
+//!
+//! `cargo run --release -p nlrt-tests --example slow_unit_times -- fuzz/slow/displacement_f32/long-column-miss f32 [brute]`
+//!
+//! `brute` also tests every texel of the triangle's range (seconds to minutes on these units).
+
+use nlrt_accel::TraversalStats;
+use nlrt_baselines::{AffineTracing, MarchOptions, Marching};
+use nlrt_poly::Real;
+use nlrt_tests::fuzz_input::displacement_case;
+use std::time::Instant;
+
+fn run<T: Real>(data: &[u8], brute: bool) {
+    let Some((surface, ray)) = displacement_case::<T>(data) else {
+        println!("the unit does not set up a surface and a ray");
+        return;
+    };
+    println!("texel range of triangle 0: {:?}", surface.roots(0));
+    let t = Instant::now();
+    let mut stats = TraversalStats::default();
+    let hit = surface.intersect(&ray, T::ZERO, T::INFINITY, &mut stats);
+    let distance = hit.map(|h| h.hit.t.to_f64());
+    println!("nonlinear: {:?}, hit {distance:?}, {stats:?}", t.elapsed());
+    let t = Instant::now();
+    let mut stats = TraversalStats::default();
+    let hit = surface.intersect_affine(&ray, T::ZERO, T::INFINITY, &mut stats);
+    let distance = hit.map(|h| h.t.to_f64());
+    println!(
+        "tessellation-free (affine): {:?}, hit {distance:?}, {stats:?}",
+        t.elapsed()
+    );
+    let opts = MarchOptions {
+        max_samples: 256,
+        ..MarchOptions::default()
+    };
+    let t = Instant::now();
+    let mut stats = TraversalStats::default();
+    let _ = surface.intersect_marching(&ray, T::ZERO, T::INFINITY, &opts, &mut stats);
+    println!("marching: {:?}", t.elapsed());
+    if brute {
+        let t = Instant::now();
+        let hit = surface.intersect_brute_force(&ray, T::ZERO, T::INFINITY);
+        let distance = hit.map(|h| h.hit.t.to_f64());
+        println!("every texel: {:?}, hit {distance:?}", t.elapsed());
+    }
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    let (Some(path), Some(precision)) = (args.get(1), args.get(2)) else {
+        eprintln!("usage: slow_unit_times <unit file> <f32|f64> [brute]");
+        std::process::exit(2);
+    };
+    let data = match std::fs::read(path) {
+        Ok(d) => d,
+        Err(e) => {
+            eprintln!("{path}: {e}");
+            std::process::exit(2);
+        }
+    };
+    let brute = args.get(3).is_some_and(|a| a == "brute");
+    match precision.as_str() {
+        "f32" => run::<f32>(&data, brute),
+        "f64" => run::<f64>(&data, brute),
+        _ => {
+            eprintln!("precision must be f32 or f64");
+            std::process::exit(2);
+        }
+    }
+}
