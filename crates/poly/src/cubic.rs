@@ -150,18 +150,15 @@ impl<T: Real> Cubic<T> {
         self.moderate && ax <= T::pow2(r) && (self.tiny_safe || ax >= T::pow2(-r) || ax == T::ZERO)
     }
 
-    /// [`Self::plain_on`] without the critical points: the coefficients and the ends only.
-    #[inline(always)]
-    fn plain_interval(&self, lo: T, hi: T) -> bool {
-        let top = T::pow2(safe_argument_exponent::<T>());
-        self.moderate && lo >= -top && hi <= top
-    }
-
     /// [`Self::plain_at`] for every point of `[lo, hi]` at once (the upper bound only needs the
     /// ends).
     #[inline(always)]
     fn plain_on(&self, lo: T, hi: T, points: &[T; 4]) -> bool {
-        self.plain_interval(lo, hi) && (self.tiny_safe || points.iter().all(|&x| self.plain_at(x)))
+        let top = T::pow2(safe_argument_exponent::<T>());
+        self.moderate
+            && lo >= -top
+            && hi <= top
+            && (self.tiny_safe || points.iter().all(|&x| self.plain_at(x)))
     }
 
     /// `p(x)` and its rounding-error bound, both possibly scaled by one positive power of two
@@ -443,7 +440,8 @@ fn cubic_roots<T: Real, const FIRST: bool>(c: [T; 4], lo: T, hi: T) -> Roots<T> 
 /// variable at every evaluation and bisect across binades: this is faster, and more accurate:
 /// each root is the nearest f32 to a root found to f64 precision. Rounding is monotonic, so a
 /// root in `[lo, hi]` stays there (the ends are `T` values); roots that round together are
-/// reported once, and one beyond `T`'s range is dropped, as the contract says.
+/// reported once, and one beyond `T`'s range is dropped, as the contract says. Out of line
+/// and cold: the plain path of the caller keeps the layout it was measured with.
 #[cold]
 #[inline(never)]
 fn solve_in_f64<T: Real, const FIRST: bool>(c: [T; 4], lo: T, hi: T) -> Roots<T> {
