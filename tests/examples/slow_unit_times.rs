@@ -1,20 +1,26 @@
-//! Times one displacement slow unit (`fuzz/slow/displacement_<f32|f64>/<unit>`) on nonlinear
-//! tracing and on the compared methods the fuzz target runs, with the walk's counters:
+//! Times one slow unit (`fuzz/slow/<displacement|shell>_<f32|f64>/<unit>`) on nonlinear
+//! tracing (and, for displacement, on the compared methods the fuzz target runs), with the
+//! walk's counters:
 //!
 //! `cargo run --release -p nlrt-tests --example slow_unit_times -- fuzz/slow/displacement_f32/long-column-miss f32 [brute]`
 //!
-//! `brute` also tests every texel of the triangle's range (seconds to minutes on these units).
+//! `brute` also tests every cell of the triangle's range (seconds to minutes on these units).
+//! A unit is decoded as its directory's fuzz target decodes it (a `shell_` directory: the
+//! shell target).
 
 use nlrt_accel::TraversalStats;
 use nlrt_baselines::{AffineTracing, MarchOptions, Marching};
 use nlrt_poly::Real;
-use nlrt_tests::fuzz_input::displacement_case;
+use nlrt_tests::fuzz_input::{displacement_case, shell_case};
 use std::time::Instant;
 
 fn run<T: Real>(data: &[u8], brute: bool) {
-    let Some((surface, ray)) = displacement_case::<T>(data) else {
-        println!("the unit does not set up a surface and a ray");
-        return;
+    let (surface, ray) = match displacement_case::<T>(data) {
+        Ok(case) => case,
+        Err(e) => {
+            println!("the unit does not set up: {e}");
+            return;
+        }
     };
     println!("texel range of triangle 0: {:?}", surface.roots(0));
     let t = Instant::now();
@@ -46,6 +52,28 @@ fn run<T: Real>(data: &[u8], brute: bool) {
     }
 }
 
+fn run_shell<T: Real>(data: &[u8], brute: bool) {
+    let (surface, ray) = match shell_case::<T>(data) {
+        Ok(case) => case,
+        Err(e) => {
+            println!("the unit does not set up: {e}");
+            return;
+        }
+    };
+    println!("tile range of triangle 0: {:?}", surface.roots(0));
+    let t = Instant::now();
+    let mut stats = TraversalStats::default();
+    let hit = surface.intersect(&ray, T::ZERO, T::INFINITY, &mut stats);
+    let distance = hit.map(|h| h.hit.t.to_f64());
+    println!("nonlinear: {:?}, hit {distance:?}, {stats:?}", t.elapsed());
+    if brute {
+        let t = Instant::now();
+        let hit = surface.intersect_brute_force(&ray, T::ZERO, T::INFINITY);
+        let distance = hit.map(|h| h.hit.t.to_f64());
+        println!("every tile: {:?}, hit {distance:?}", t.elapsed());
+    }
+}
+
 fn main() {
     let args: Vec<String> = std::env::args().collect();
     let (Some(path), Some(precision)) = (args.get(1), args.get(2)) else {
@@ -60,9 +88,12 @@ fn main() {
         }
     };
     let brute = args.get(3).is_some_and(|a| a == "brute");
-    match precision.as_str() {
-        "f32" => run::<f32>(&data, brute),
-        "f64" => run::<f64>(&data, brute),
+    let shell = path.contains("shell_");
+    match (precision.as_str(), shell) {
+        ("f32", false) => run::<f32>(&data, brute),
+        ("f64", false) => run::<f64>(&data, brute),
+        ("f32", true) => run_shell::<f32>(&data, brute),
+        ("f64", true) => run_shell::<f64>(&data, brute),
         _ => {
             eprintln!("precision must be f32 or f64");
             std::process::exit(2);

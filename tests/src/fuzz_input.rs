@@ -294,17 +294,19 @@ fn map_of<T: Real>(data: &[u8]) -> (nlrt_accel::HeightField, T, &[u8]) {
     )
 }
 
-/// The surface and ray of a [`fuzz_displacement`] input, or `None` where set-up rejects it.
-#[must_use]
+/// The surface and ray of a [`fuzz_displacement`] input, or why set-up rejects it.
+///
+/// # Errors
+/// No valid base mesh and ray in the bytes, or the surface's own error message.
 pub fn displacement_case<T: Real>(
     data: &[u8],
-) -> Option<(nlrt_accel::DisplacedSurface<T>, nlrt_shellmap::Ray<T>)> {
+) -> Result<(nlrt_accel::DisplacedSurface<T>, nlrt_shellmap::Ray<T>), String> {
     use nlrt_accel::DisplacedSurface;
     let (field, tiling, rest) = map_of::<T>(data);
     let x = decode::<T, 30>(rest).coeffs;
-    let (mesh, ray) = base_and_ray(&x)?;
-    let surface = DisplacedSurface::new(mesh, field, T::ONE, tiling).ok()?;
-    Some((surface, ray))
+    let (mesh, ray) = base_and_ray(&x).ok_or("no valid base triangle and ray")?;
+    let surface = DisplacedSurface::new(mesh, field, T::ONE, tiling).map_err(|e| e.to_string())?;
+    Ok((surface, ray))
 }
 
 /// The displacement traversal target: a small height map (side 2 to 16, any samples, either
@@ -315,7 +317,7 @@ pub fn displacement_case<T: Real>(
 pub fn fuzz_displacement<T: Real>(data: &[u8]) {
     use nlrt_accel::TraversalStats;
     use nlrt_baselines::{AffineTracing, ConeTraced, Marching};
-    let Some((surface, ray)) = displacement_case::<T>(data) else {
+    let Ok((surface, ray)) = displacement_case::<T>(data) else {
         return;
     };
     let fast = surface.intersect(&ray, T::ZERO, T::INFINITY, &mut TraversalStats::default());
@@ -530,11 +532,14 @@ pub fn seam_seed<T: Real>(seed: u64) -> Vec<u8> {
     bytes
 }
 
-/// The shell traversal target: up to four object triangles in the unit tile (raw values;
-/// out-of-tile objects must be rejected cleanly), tiling 1 to 8, one base triangle and a
-/// ray. Same properties as [`fuzz_displacement`].
-pub fn fuzz_shell<T: Real>(data: &[u8]) {
-    use nlrt_accel::{ShellObject, ShellSurface, TraversalStats};
+/// The surface and ray of a [`fuzz_shell`] input, or why set-up rejects it.
+///
+/// # Errors
+/// No valid object, base mesh and ray in the bytes, or the surface's own error message.
+pub fn shell_case<T: Real>(
+    data: &[u8],
+) -> Result<(nlrt_accel::ShellSurface<T>, nlrt_shellmap::Ray<T>), String> {
+    use nlrt_accel::{ShellObject, ShellSurface};
     use nlrt_poly::Vector3;
     let header = data.first().copied().unwrap_or(0);
     let count = usize::from(header & 3) + 1;
@@ -556,13 +561,18 @@ pub fn fuzz_shell<T: Real>(data: &[u8]) {
             })
         })
         .collect();
-    let Ok(object) = ShellObject::new(object) else {
-        return;
-    };
-    let Some((mesh, ray)) = base_and_ray(&x) else {
-        return;
-    };
-    let Ok(surface) = ShellSurface::new(mesh, object, T::ONE, tiling) else {
+    let object = ShellObject::new(object).map_err(|e| e.to_string())?;
+    let (mesh, ray) = base_and_ray(&x).ok_or("no valid base triangle and ray")?;
+    let surface = ShellSurface::new(mesh, object, T::ONE, tiling).map_err(|e| e.to_string())?;
+    Ok((surface, ray))
+}
+
+/// The shell traversal target: up to four object triangles in the unit tile (raw values;
+/// out-of-tile objects must be rejected cleanly), tiling 1 to 8, one base triangle and a
+/// ray. Same properties as [`fuzz_displacement`].
+pub fn fuzz_shell<T: Real>(data: &[u8]) {
+    use nlrt_accel::TraversalStats;
+    let Ok((surface, ray)) = shell_case::<T>(data) else {
         return;
     };
     let fast = surface.intersect(&ray, T::ZERO, T::INFINITY, &mut TraversalStats::default());

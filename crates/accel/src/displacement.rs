@@ -31,6 +31,12 @@ pub enum DisplacementError {
         /// The triangle.
         triangle: usize,
     },
+    /// A triangle's positions or normals times the height scale reach beyond
+    /// [`nlrt_shellmap::max_world_coordinate`] of the precision.
+    WorldOutOfRange {
+        /// The triangle.
+        triangle: usize,
+    },
 }
 
 impl fmt::Display for DisplacementError {
@@ -41,6 +47,10 @@ impl fmt::Display for DisplacementError {
             Self::UvOutOfRange { triangle } => write!(
                 f,
                 "triangle {triangle}: texture coordinates times tiling reach beyond {MAX_TEXEL_COORDINATE} texels"
+            ),
+            Self::WorldOutOfRange { triangle } => write!(
+                f,
+                "triangle {triangle}: a position, or a normal times the height scale, has a coordinate beyond the largest this precision traces (2^46 in f32, 2^494 in f64: see max_world_coordinate)"
             ),
         }
     }
@@ -169,6 +179,9 @@ impl<T: Real> DisplacedSurface<T> {
             SetupError::HeightScale(v) => DisplacementError::BadHeightScale(v),
             SetupError::Tiling(v) => DisplacementError::BadTiling(v),
             SetupError::UvOutOfRange(triangle) => DisplacementError::UvOutOfRange { triangle },
+            SetupError::WorldOutOfRange(triangle) => {
+                DisplacementError::WorldOutOfRange { triangle }
+            }
         })?;
         Ok(Self {
             prisms,

@@ -36,6 +36,14 @@ pub enum MeshError {
     },
     /// No triangles.
     Empty,
+    /// A pose's position, or normal times the surface's height scale, has a coordinate
+    /// beyond `nlrt_shellmap::max_world_coordinate` of the precision.
+    BeyondWorldRange {
+        /// Vertex.
+        vertex: usize,
+        /// `"position"` or `"normal"` (times the height scale).
+        attribute: &'static str,
+    },
     /// A new pose ([`BaseMesh::set_pose`]) has another vertex count than the mesh.
     PoseVertexCount {
         /// Vertices of the mesh.
@@ -68,6 +76,10 @@ impl fmt::Display for MeshError {
                 write!(f, "vertex {vertex} has a NaN or infinite {attribute}")
             }
             Self::Empty => write!(f, "the mesh has no triangles"),
+            Self::BeyondWorldRange { vertex, attribute } => write!(
+                f,
+                "vertex {vertex}: a coordinate of its {attribute} is beyond the largest this precision traces (2^46 in f32, 2^494 in f64: see max_world_coordinate)"
+            ),
             Self::PoseVertexCount {
                 vertices,
                 positions,

@@ -39,6 +39,12 @@ pub enum ShellError {
         /// The base triangle.
         triangle: usize,
     },
+    /// A base triangle's positions or normals times the height scale reach beyond
+    /// [`nlrt_shellmap::max_world_coordinate`] of the precision.
+    WorldOutOfRange {
+        /// The base triangle.
+        triangle: usize,
+    },
 }
 
 impl fmt::Display for ShellError {
@@ -54,6 +60,10 @@ impl fmt::Display for ShellError {
             Self::UvOutOfRange { triangle } => write!(
                 f,
                 "base triangle {triangle}: uvs times tiling reach beyond {MAX_TEXEL_COORDINATE} tiles"
+            ),
+            Self::WorldOutOfRange { triangle } => write!(
+                f,
+                "base triangle {triangle}: a position, or a normal times the height scale, has a coordinate beyond the largest this precision traces (2^46 in f32, 2^494 in f64: see max_world_coordinate)"
             ),
         }
     }
@@ -168,6 +178,7 @@ impl<T: Real> ShellSurface<T> {
             SetupError::HeightScale(v) => ShellError::BadHeightScale(v),
             SetupError::Tiling(v) => ShellError::BadTiling(v),
             SetupError::UvOutOfRange(triangle) => ShellError::UvOutOfRange { triangle },
+            SetupError::WorldOutOfRange(triangle) => ShellError::WorldOutOfRange { triangle },
         })?;
         Ok(Self { prisms, object })
     }

@@ -3,8 +3,8 @@
 //! implicit quadtree of `cells`). Displacement and shell mapping both stand on it.
 
 use alloc::vec::Vec;
-use nlrt_poly::{Real, Vector2};
-use nlrt_shellmap::{NonlinearRay, Prism, Ray};
+use nlrt_poly::{Real, Vector2, Vector3};
+use nlrt_shellmap::{NonlinearRay, Prism, Ray, max_world_coordinate};
 
 use crate::bvh::{Bvh4, SlabRay, sah_excess};
 use crate::mesh::{BaseMesh, prism_bounds};
@@ -70,13 +70,27 @@ pub(crate) enum SetupError {
     Tiling(f64),
     /// A triangle's cells reach beyond [`MAX_TEXEL_COORDINATE`].
     UvOutOfRange(usize),
+    /// A triangle's prism (positions, normals times the height scale) reaches beyond
+    /// [`max_world_coordinate`].
+    WorldOutOfRange(usize),
+}
+
+/// Whether every position and scaled normal of `prism` lies within [`max_world_coordinate`]
+/// (then every ray whose origin does too has a finite nonlinear ray in it).
+pub(crate) fn within_world_range<T: Real>(prism: &Prism<T>) -> bool {
+    let limit = max_world_coordinate::<T>();
+    prism
+        .p
+        .iter()
+        .chain(prism.n.iter())
+        .all(|v| (0..3).all(|i| v.get(i).abs() <= limit))
 }
 
 /// A base mesh's prisms with their TLAS and per-triangle root cells.
 #[derive(Clone, Debug)]
 pub(crate) struct PrismTlas<T: Real> {
     pub(crate) mesh: BaseMesh<T>,
-    height_scale: T,
+    pub(crate) height_scale: T,
     tiling: T,
     roots: Vec<RootNodes>,
     pub(crate) tlas: Bvh4<T>,
@@ -105,6 +119,9 @@ impl<T: Real> PrismTlas<T> {
         let mut boxes = Vec::with_capacity(mesh.triangle_count());
         for i in 0..mesh.triangle_count() {
             let prism = mesh.prism(i, height_scale, tiling);
+            if !within_world_range(&prism) {
+                return Err(SetupError::WorldOutOfRange(i));
+            }
             boxes.push(prism_bounds(&prism));
             let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
             for uv in prism.uv {
@@ -190,6 +207,11 @@ impl<T: Real> PrismTlas<T> {
         self.traverse(ray, t_min, t_max, |tri, prism, t_max| {
             stats.prism_tests += 1;
             let nl = NonlinearRay::new(prism, ray);
+            // Eq. 6 sees the origin only through its offset across the ray, which is below
+            // the prism box's size for a ray that entered the box, and the box lies within
+            // `max_world_coordinate` (checked at construction): finite. A NaN curve would
+            // have the walk visit every node (every comparison with NaN fails).
+            debug_assert!(nl.is_finite(), "{nl:?} in {prism:?}");
             blas(tri, prism, &nl, t_max, stats)
         })
     }
@@ -206,11 +228,112 @@ impl<T: Real> PrismTlas<T> {
         for tri in 0..self.mesh.triangle_count() {
             let prism = self.prism(tri);
             let nl = NonlinearRay::new(&prism, ray);
+            if !nl.is_finite() {
+                // The ray's line passes farther from the prism than `max_world_coordinate`,
+                // beyond the prism's extent: it cannot meet it (and would test every cell).
+                continue;
+            }
             if let Some((hit, t)) = per_triangle(tri, &prism, &nl, t_max) {
                 t_max = t;
                 best = Some(hit);
             }
         }
         best
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::{BaseMesh, DisplacedSurface, DisplacementError, HeightField, MeshError};
+    use crate::{TlasUpdate, TraversalStats, Wrap};
+    use alloc::vec;
+    use nlrt_poly::{Real, Vector2, Vector3};
+    use nlrt_shellmap::{Ray, max_world_coordinate};
+
+    /// One unit triangle in the z = 0 plane, normals up (a flat map at height 0.5 puts the
+    /// surface at z = 0.5 times the height scale), moved by `shift` along x.
+    fn triangle<T: Real>(shift: T) -> BaseMesh<T> {
+        let v = |x: f64, y: f64| T::Vec3::new(T::from_f64(x) + shift, T::from_f64(y), T::ZERO);
+        let up = T::Vec3::new(T::ZERO, T::ZERO, T::ONE);
+        let uv = |x: f64, y: f64| T::Vec2::new(T::from_f64(x), T::from_f64(y));
+        let mesh = BaseMesh::new(
+            vec![v(0.0, 0.0), v(1.0, 0.0), v(0.0, 1.0)],
+            vec![up; 3],
+            vec![uv(0.0, 0.0), uv(1.0, 0.0), uv(0.0, 1.0)],
+            vec![[0, 1, 2]],
+        );
+        mesh.expect("a valid triangle")
+    }
+
+    fn flat_map() -> HeightField {
+        HeightField::from_unit_heights(4, &[0.5; 16], Wrap::Clamp).expect("a valid map")
+    }
+
+    /// Meshes within `max_world_coordinate` build, beyond it they are refused by name (at
+    /// construction and in a new pose, which leaves the surface as it was); rays from far
+    /// away still hit (the traversal asserts in debug builds that no prism it sets up has a
+    /// non-finite nonlinear ray), and the test reference skips the far prisms whose
+    /// nonlinear ray overflows.
+    fn world_range_is_checked<T: Real>() {
+        let limit = max_world_coordinate::<T>();
+        let at_limit = limit - T::from_i32(2).max(limit * T::EPSILON * T::TWO);
+        assert!(DisplacedSurface::new(triangle(at_limit), flat_map(), T::ONE, T::ONE).is_ok());
+        let far = limit * T::TWO;
+        let refused = DisplacedSurface::new(triangle(far), flat_map(), T::ONE, T::ONE);
+        assert_eq!(
+            refused.err(),
+            Some(DisplacementError::WorldOutOfRange { triangle: 0 })
+        );
+        let tall = DisplacedSurface::new(triangle(T::ZERO), flat_map(), far, T::ONE);
+        assert_eq!(
+            tall.err(),
+            Some(DisplacementError::WorldOutOfRange { triangle: 0 })
+        );
+
+        let mut surface = DisplacedSurface::new(triangle(T::ZERO), flat_map(), T::ONE, T::ONE)
+            .expect("a unit triangle builds");
+        let moved = triangle(far);
+        let error = surface.set_pose(moved.positions(), moved.normals(), TlasUpdate::Refit);
+        assert!(matches!(
+            error,
+            Err(MeshError::BeyondWorldRange {
+                vertex: 0,
+                attribute: "position"
+            })
+        ));
+        assert_eq!(surface.mesh().positions()[1].x(), T::ONE);
+
+        let down = T::Vec3::new(T::ZERO, T::ZERO, -T::ONE);
+        let aim = |z: T| {
+            Ray::new(T::Vec3::new(T::from_f64(0.25), T::from_f64(0.25), z), down)
+                .expect("a valid ray")
+        };
+        let mut stats = TraversalStats::default();
+        let hit = surface.intersect(&aim(T::TWO), T::ZERO, T::INFINITY, &mut stats);
+        let t = hit.expect("the flat surface at height 0.5").hit.t;
+        assert!((t - T::from_f64(1.5)).abs() < T::from_f64(1e-3), "{t:?}");
+        // From far above, straight down: Eq. 6 sees only the offset across the ray.
+        let mut stats = TraversalStats::default();
+        let hit = surface.intersect(&aim(T::MAX / T::pow2(4)), T::ZERO, T::INFINITY, &mut stats);
+        assert!(hit.is_some(), "{stats:?}");
+        // Passing far beside it: every prism is set up by the test reference, which skips
+        // the ones whose nonlinear ray overflows (they are far off the ray's line).
+        let beside = Ray::new(T::Vec3::new(T::ZERO, T::MAX / T::pow2(4), T::ONE), down)
+            .expect("a valid ray");
+        assert!(
+            surface
+                .intersect_brute_force(&beside, T::ZERO, T::INFINITY)
+                .is_none()
+        );
+    }
+
+    #[test]
+    fn world_range_is_checked_f32() {
+        world_range_is_checked::<f32>();
+    }
+
+    #[test]
+    fn world_range_is_checked_f64() {
+        world_range_is_checked::<f64>();
     }
 }

@@ -508,12 +508,19 @@ impl Scene {
         let mesh = self
             .try_mesh::<T>()
             .map_err(|e| format!("base mesh in {}: {e}", T::NAME))?;
-        DisplacedSurface::with_seam_rule(mesh, field.clone(), scale, tiling, self.seam_rule).map_err(|e| {
-            format!(
-                "in {}: {e} (texture coordinates x tiling x map side must stay within 2^22 texels)",
-                T::NAME
-            )
-        })
+        DisplacedSurface::with_seam_rule(mesh, field.clone(), scale, tiling, self.seam_rule)
+            .map_err(|e| {
+                let hint = match e {
+                    nlrt_accel::DisplacementError::UvOutOfRange { .. } => {
+                        " (texture coordinates x tiling x map side must stay within 2^22 texels)"
+                    }
+                    nlrt_accel::DisplacementError::WorldOutOfRange { .. } => {
+                        world_range_hint::<T>()
+                    }
+                    _ => "",
+                };
+                format!("in {}: {e}{hint}", T::NAME)
+            })
     }
 
     /// The shell-mapped surface of a shell scene in precision `T`.
@@ -533,10 +540,14 @@ impl Scene {
         let object = ShellObject::new(object.iter().map(|t| t.map(|p| v(&p))).collect())
             .map_err(|e| format!("object in {}: {e}", T::NAME))?;
         ShellSurface::new(mesh, object, scale, tiling).map_err(|e| {
-            format!(
-                "in {}: {e} (texture coordinates x tiling must stay within 2^22 tiles)",
-                T::NAME
-            )
+            let hint = match e {
+                nlrt_accel::ShellError::UvOutOfRange { .. } => {
+                    " (texture coordinates x tiling must stay within 2^22 tiles)"
+                }
+                nlrt_accel::ShellError::WorldOutOfRange { .. } => world_range_hint::<T>(),
+                _ => "",
+            };
+            format!("in {}: {e}{hint}", T::NAME)
         })
     }
 
@@ -1189,5 +1200,14 @@ pub fn seam_sphere(side: usize) -> Scene {
         material: Material::Diffuse,
         motion: Motion::deform(Deformation::Breathe),
         seam_rule: SeamRule::Closed,
+    }
+}
+
+/// What to do about a mesh beyond [`nlrt_shellmap::max_world_coordinate`] of precision `T`.
+fn world_range_hint<T: nlrt_poly::Real>() -> &'static str {
+    if T::MANTISSA_DIGITS < f64::MANTISSA_DIGITS {
+        " (scale the scene down, or use --precision f64)"
+    } else {
+        " (scale the scene down)"
     }
 }

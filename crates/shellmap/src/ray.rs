@@ -111,6 +111,27 @@ fn quadratic_at<T: Real>(c: &[T; 3], h: T) -> T {
     c[2].mul_add(h, c[1]).mul_add(h, c[0])
 }
 
+/// The largest world coordinate (of a prism's positions and of its normals scaled by the
+/// height scale) for which every coefficient of a [`NonlinearRay`] is finite in `T`, for
+/// every ray whose line passes within the same distance of the prism's first vertex (every
+/// ray that enters the prism's box): `2^46` in f32, `2^494` in f64. The surfaces refuse
+/// meshes beyond it.
+///
+/// Eq. 6 sees the ray's origin only through its offset across the ray (the rows are dotted
+/// with two unit vectors perpendicular to the direction), so a distant origin along the ray
+/// costs nothing. With every such coordinate within `2^L` and texture coordinates within
+/// `2^22` (`MAX_TEXEL_COORDINATE`), each entry of Eq. 6's rows is a dot product of a unit
+/// vector with a difference of two coordinate vectors, at most `sqrt(3) 2^(L+1) < 2^(L+2)`;
+/// each coefficient of the 2x2 determinants (`d`, `alpha`, `beta`) is at most two differences
+/// of products, `2^(2L+6)`; `u` and `v` add the texture coordinates' spans, `2^(2L+6) (2^22 +
+/// 2^24) < 2^(2L+31)`; and the walk's split-line quadratics `U - c D` (`|c| <= 2^22`)
+/// evaluated at heights in `[-1, 1]` stay below `2^(2L+34)`. `2L + 34` below `T`'s largest
+/// exponent, with a bit to spare for rounding, gives `L = (MAX_EXPONENT - 35) / 2`.
+#[must_use]
+pub fn max_world_coordinate<T: Real>() -> T {
+    T::pow2((T::MAX_EXPONENT - 35) / 2)
+}
+
 /// A world ray seen in one prism: the curve `h -> (alpha(h), beta(h), h)` in canonical space
 /// and `h -> (u(h), v(h), h)` in texture space, each coordinate a ratio of quadratics with the
 /// common denominator `d(h)` (Eq. 7 and 8).
@@ -182,6 +203,22 @@ impl<T: Real> NonlinearRay<T> {
             rows: [r0, r1],
             ray: *ray,
         }
+    }
+
+    /// Whether every coefficient is finite: always, for prisms within
+    /// [`max_world_coordinate`] and rays whose line passes within it of them; beyond it the
+    /// curve cannot be followed in `T`.
+    #[must_use]
+    #[inline]
+    pub fn is_finite(&self) -> bool {
+        let quadratics = [self.alpha, self.beta, self.d, self.u, self.v];
+        let rows = self.rows.iter().flatten().flatten();
+        // Non-short-circuit: a fixed number of compares, no branch per value.
+        quadratics
+            .iter()
+            .flatten()
+            .chain(rows)
+            .fold(true, |ok, v| ok & v.is_finite())
     }
 
     /// Canonical `(alpha, beta)` at height `h` by Eq. 7; `None` where the denominator is 0
@@ -462,5 +499,58 @@ impl<T: Real> BaseEdges<T> {
             }
         }
         end + side * reach.min(T::ONE + a)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Prisms and origins with every coordinate at `+-max_world_coordinate` (random signs,
+    /// the worst case of the bound's derivation), texture coordinates at `+-2^22`, random
+    /// directions: every coefficient of the nonlinear ray is finite, and so are the split-line
+    /// quadratics `U - c D` the walk evaluates, at heights in `[-1, 1]`.
+    fn coefficients_stay_finite_at_the_limit<T: Real>() {
+        let limit = max_world_coordinate::<T>();
+        let mut state = 0x2545_f491_4f6c_dd1d_u64;
+        let mut next = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            state
+        };
+        let mut signed = |scale: T| if next() & 1 == 0 { scale } else { -scale };
+        let uv_limit = T::pow2(22);
+        for _ in 0..2000 {
+            let mut corner = || T::Vec3::new(signed(limit), signed(limit), signed(limit));
+            let (p, n) = (
+                [corner(), corner(), corner()],
+                [corner(), corner(), corner()],
+            );
+            let origin = corner();
+            let uv = [(); 3].map(|()| T::Vec2::new(signed(uv_limit), signed(uv_limit)));
+            let dir = T::Vec3::new(signed(T::ONE), signed(T::HALF), signed(T::from_f64(0.3)));
+            let Some(ray) = Ray::new(origin, dir) else {
+                panic!("a unit direction");
+            };
+            let nl = NonlinearRay::new(&Prism::new(p, n, uv), &ray);
+            assert!(nl.is_finite(), "{nl:?}");
+            for h in [-T::ONE, T::ZERO, T::ONE] {
+                for c in [-uv_limit, uv_limit] {
+                    let line = quadratic_at(&nl.u, h) - c * quadratic_at(&nl.d, h);
+                    assert!(line.is_finite(), "{nl:?} at h = {h:?}, line {c:?}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn coefficients_stay_finite_at_the_limit_f32() {
+        coefficients_stay_finite_at_the_limit::<f32>();
+    }
+
+    #[test]
+    fn coefficients_stay_finite_at_the_limit_f64() {
+        coefficients_stay_finite_at_the_limit::<f64>();
     }
 }
