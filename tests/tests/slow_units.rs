@@ -54,26 +54,43 @@ fn walk_is_bounded(dir: &str, walk: impl Fn(&[u8]) -> Walked) {
     assert!(count > 0);
 }
 
+/// The walk's counters on one unit and their bound: 16 node tests per node of each base
+/// triangle's cell range (the displacement and shell surfaces share the walk).
+fn counted(
+    triangles: usize,
+    roots: impl Fn(usize) -> nlrt_accel::RootNodes,
+    intersect: impl FnOnce(&mut TraversalStats),
+) -> Walked {
+    let mut stats = TraversalStats::default();
+    intersect(&mut stats);
+    let bound = (0..triangles)
+        .map(|tri| 4 * 4 * nodes_in_range(roots(tri)))
+        .sum();
+    Ok((stats, bound))
+}
+
 /// [`walk_is_bounded`] for a displacement target's units.
 fn displacement_walk<T: nlrt_poly::Real>(data: &[u8]) -> Walked {
     let (surface, ray) = displacement_case::<T>(data)?;
-    let mut stats = TraversalStats::default();
-    let _ = surface.intersect(&ray, T::ZERO, T::INFINITY, &mut stats);
-    let bound = (0..surface.mesh().triangle_count())
-        .map(|tri| 4 * 4 * nodes_in_range(surface.roots(tri)))
-        .sum();
-    Ok((stats, bound))
+    counted(
+        surface.mesh().triangle_count(),
+        |tri| surface.roots(tri),
+        |stats| {
+            let _ = surface.intersect(&ray, T::ZERO, T::INFINITY, stats);
+        },
+    )
 }
 
 /// [`walk_is_bounded`] for a shell target's units: the same walk over tiles.
 fn shell_walk<T: nlrt_poly::Real>(data: &[u8]) -> Walked {
     let (surface, ray) = shell_case::<T>(data)?;
-    let mut stats = TraversalStats::default();
-    let _ = surface.intersect(&ray, T::ZERO, T::INFINITY, &mut stats);
-    let bound = (0..surface.mesh().triangle_count())
-        .map(|tri| 4 * 4 * nodes_in_range(surface.roots(tri)))
-        .sum();
-    Ok((stats, bound))
+    counted(
+        surface.mesh().triangle_count(),
+        |tri| surface.roots(tri),
+        |stats| {
+            let _ = surface.intersect(&ray, T::ZERO, T::INFINITY, stats);
+        },
+    )
 }
 
 #[test]
