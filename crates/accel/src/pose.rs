@@ -6,12 +6,11 @@
 //! 5.2), so there is no per-prism data to re-derive.
 
 use alloc::vec::Vec;
-use nlrt_poly::{Real, Vector3};
-use nlrt_shellmap::max_world_coordinate;
+use nlrt_poly::Real;
 
 use crate::bvh::{Aabb, Bvh4, sah_excess};
 use crate::mesh::{MeshError, prism_bounds};
-use crate::tlas::PrismTlas;
+use crate::tlas::{PrismTlas, beyond_world_range};
 
 /// How the TLAS follows a new pose.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -83,14 +82,15 @@ impl<T: Real> PrismTlas<T> {
         update: TlasUpdate,
     ) -> Result<PoseUpdate, MeshError> {
         // Checked before the mesh moves, so a rejected pose leaves the surface as it was.
-        let limit = max_world_coordinate::<T>();
-        let beyond = |v: &T::Vec3| (0..3).any(|i| v.get(i).abs() > limit); // NaN: set_pose says so
-        let scaled = |n: &T::Vec3| *n * self.height_scale;
         for (vertex, (p, n)) in positions.iter().zip(normals).enumerate() {
-            if beyond(p) || beyond(&scaled(n)) {
-                let attribute = if beyond(p) { "position" } else { "normal" };
-                return Err(MeshError::BeyondWorldRange { vertex, attribute });
-            }
+            let attribute = if beyond_world_range::<T>(p) {
+                "position"
+            } else if beyond_world_range::<T>(&(*n * self.height_scale)) {
+                "normal"
+            } else {
+                continue;
+            };
+            return Err(MeshError::BeyondWorldRange { vertex, attribute });
         }
         self.mesh.set_pose(positions, normals)?;
         let boxes = self.prism_boxes();

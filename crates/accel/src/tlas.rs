@@ -75,15 +75,21 @@ pub(crate) enum SetupError {
     WorldOutOfRange(usize),
 }
 
-/// Whether every position and scaled normal of `prism` lies within [`max_world_coordinate`]
-/// (then every ray whose origin does too has a finite nonlinear ray in it).
-pub(crate) fn within_world_range<T: Real>(prism: &Prism<T>) -> bool {
+/// Whether a coordinate of `v` (a position, or a normal times the height scale) lies beyond
+/// [`max_world_coordinate`]. NaN is not beyond: the mesh's own checks name it.
+pub(crate) fn beyond_world_range<T: Real>(v: &T::Vec3) -> bool {
     let limit = max_world_coordinate::<T>();
-    prism
+    (0..3).any(|i| v.get(i).abs() > limit)
+}
+
+/// Whether every position and scaled normal of `prism` lies within [`max_world_coordinate`]
+/// (then every ray whose line passes within it of the prism has a finite nonlinear ray in it).
+pub(crate) fn within_world_range<T: Real>(prism: &Prism<T>) -> bool {
+    !prism
         .p
         .iter()
         .chain(prism.n.iter())
-        .all(|v| (0..3).all(|i| v.get(i).abs() <= limit))
+        .any(beyond_world_range::<T>)
 }
 
 /// A base mesh's prisms with their TLAS and per-triangle root cells.
