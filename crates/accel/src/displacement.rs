@@ -2,8 +2,10 @@
 //! traversed by nonlinear rays (Ogaki 2023, sec. 4.4, 5.1, 5.4).
 
 use core::fmt;
+use nlrt_poly::{
+    QUADRATIC_BATCH, decided_sign, solve_cubic_in, solve_quadratic_batch_in, solve_quadratic_in,
+};
 use nlrt_poly::{Real, Vector2, Vector3};
-use nlrt_poly::{decided_sign, solve_cubic_in, solve_quadratic_in};
 use nlrt_shellmap::{
     BaseEdges, Hit, NonlinearRay, Prism, Ray, TextureCurve, TexturePlane, alpha_beta_eq11,
     decidedly_outside_in_f64, facing_unit, world_normal,
@@ -451,36 +453,32 @@ impl<T: Real> DisplacedSurface<T> {
         // bound beyond the rounding of the quadratic and its evaluation) have no root to
         // solve for: the splits are the same, as the solver would find nothing there either;
         // the neighbouring texel decides the shared face by the same quadratic.
-        let faces = [(&ray.u, u0), (&ray.u, u1), (&ray.v, v0), (&ray.v, v1)];
-        for (edge, (num, face)) in faces.into_iter().enumerate() {
-            if !curve.may_cross(edge / 2, face, h_lo, h_hi) {
-                continue;
-            }
-            for &r in solve_quadratic_in(line(num, face), h_lo, h_hi).iter() {
-                splits[n] = (r, edge as u8);
-                n += 1;
-            }
-        }
-        for &r in solve_quadratic_in(diagonal, h_lo, h_hi).iter() {
-            splits[n] = (r, 4);
-            n += 1;
-        }
-        if edges.may_have_pole(h_lo, h_hi) {
-            for &r in solve_quadratic_in(ray.d, h_lo, h_hi).iter() {
-                splits[n] = (r, 5);
-                n += 1;
-            }
-        }
-        // The base triangle's edges: alpha = 0, beta = 0, alpha + beta = 1 (times D).
+        // A flat texel is decided by one point (below): no splits.
         let base_edges = &edges.edges;
-        for (k, q) in base_edges.iter().enumerate() {
-            if !edges.may_cross(k, h_lo, h_hi) {
-                continue;
+        if !flat {
+            // The quadratics to solve, each with the tag of its splits, solved on [h_lo, h_hi]
+            // together (eight lanes at a time: the same roots as one by one, bit for bit).
+            let mut batch = QuadraticBatch::default();
+            let faces = [(&ray.u, u0), (&ray.u, u1), (&ray.v, v0), (&ray.v, v1)];
+            for (edge, (num, face)) in faces.into_iter().enumerate() {
+                if curve.may_cross(edge / 2, face, h_lo, h_hi) {
+                    batch.add(line(num, face), edge as u8);
+                }
             }
-            for &r in solve_quadratic_in(*q, h_lo, h_hi).iter() {
-                splits[n] = (r, 6 + k as u8);
+            batch.add(diagonal, 4);
+            if edges.may_have_pole(h_lo, h_hi) {
+                batch.add(ray.d, 5);
+            }
+            // The base triangle's edges: alpha = 0, beta = 0, alpha + beta = 1 (times D).
+            for (k, q) in base_edges.iter().enumerate() {
+                if edges.may_cross(k, h_lo, h_hi) {
+                    batch.add(*q, 6 + k as u8);
+                }
+            }
+            batch.solve(h_lo, h_hi, |r, tag| {
+                splits[n] = (r, tag);
                 n += 1;
-            }
+            });
         }
         let splits = &mut splits[..n];
         splits.sort_unstable_by(|a, b| a.0.partial_cmp(&b.0).unwrap_or(core::cmp::Ordering::Equal));
@@ -1042,6 +1040,75 @@ impl<T: Real> DisplacedSurface<T> {
     #[must_use]
     pub fn bounds(&self) -> Aabb<T> {
         self.prisms.tlas.bounds()
+    }
+}
+
+/// The quadratics of one texel test (at most four faces, the diagonal, the pole and three
+/// base edges), collected by coefficient and solved eight at a time.
+struct QuadraticBatch<T: Real> {
+    coefficients: [[T; QUADRATIC_BATCH]; 3],
+    tags: [u8; QUADRATIC_BATCH],
+    len: usize,
+    /// The ninth, when all nine are solved.
+    overflow: Option<([T; 3], u8)>,
+}
+
+impl<T: Real> Default for QuadraticBatch<T> {
+    fn default() -> Self {
+        Self {
+            coefficients: [[T::ZERO; QUADRATIC_BATCH]; 3],
+            tags: [0; QUADRATIC_BATCH],
+            len: 0,
+            overflow: None,
+        }
+    }
+}
+
+impl<T: Real> QuadraticBatch<T> {
+    #[inline(always)]
+    fn add(&mut self, q: [T; 3], tag: u8) {
+        if self.len == QUADRATIC_BATCH {
+            self.overflow = Some((q, tag));
+            return;
+        }
+        for (k, c) in q.into_iter().enumerate() {
+            self.coefficients[k][self.len] = c;
+        }
+        self.tags[self.len] = tag;
+        self.len += 1;
+    }
+
+    /// `found(root, tag)` for each root in `[lo, hi]` of each quadratic, in the order they
+    /// were added, each one's roots increasing: [`solve_quadratic_in`]'s roots. A single
+    /// quadratic is solved alone (a batch would leave seven lanes idle; from two on the batch
+    /// measured faster on the fur, and as fast on the mountain, whose straight curves give
+    /// linear quadratics, than solving them one by one, `traversal_counts <scene> paper f32
+    /// 400`, 2026-12-05).
+    #[inline(always)]
+    fn solve(&self, lo: T, hi: T, mut found: impl FnMut(T, u8)) {
+        if self.len == 1 {
+            let q = [
+                self.coefficients[0][0],
+                self.coefficients[1][0],
+                self.coefficients[2][0],
+            ];
+            for &r in solve_quadratic_in(q, lo, hi).iter() {
+                found(r, self.tags[0]);
+            }
+        } else {
+            let ends = ([lo; QUADRATIC_BATCH], [hi; QUADRATIC_BATCH]);
+            let roots = solve_quadratic_batch_in(&self.coefficients, &ends.0, &ends.1);
+            for (i, r) in roots[..self.len].iter().enumerate() {
+                for &r in r.iter() {
+                    found(r, self.tags[i]);
+                }
+            }
+        }
+        if let Some((q, tag)) = self.overflow {
+            for &r in solve_quadratic_in(q, lo, hi).iter() {
+                found(r, tag);
+            }
+        }
     }
 }
 
