@@ -8,8 +8,9 @@
 //! subnormals, signed zeros.
 
 use nlrt_poly::{
-    CUBIC_BATCH, Real, first_cubic_root_batch_in, first_cubic_root_in, horner_with_bound_scaled,
-    solve_cubic_batch_in, solve_cubic_in, solve_quadratic_in,
+    CUBIC_BATCH, QUADRATIC_BATCH, Real, first_cubic_root_batch_in, first_cubic_root_in,
+    horner_with_bound_scaled, solve_cubic_batch_in, solve_cubic_in, solve_quadratic_batch_in,
+    solve_quadratic_in,
 };
 
 /// What the decoder made of the bytes.
@@ -178,11 +179,27 @@ pub fn fuzz_cubic_batch<T: Real>(data: &[u8]) {
     }
 }
 
-/// The quadratic fuzz target: decode, solve, check.
+/// The quadratic fuzz target: decode, solve, check; and the batch solver on eight inputs,
+/// lane `i` decoded from the bytes after the first `i` values (lane 0 is the checked input),
+/// which must give the scalar answers bit for bit.
 pub fn fuzz_quadratic<T: Real>(data: &[u8]) {
     let input = decode::<T, 3>(data);
     let roots = solve_quadratic_in(input.coeffs, input.lo, input.hi);
     check_answer(&input, &roots);
+    let width = (T::BITS / 8) as usize;
+    let lanes: [Input<T, 3>; QUADRATIC_BATCH] =
+        core::array::from_fn(|i| decode::<T, 3>(&data[(i * width).min(data.len())..]));
+    let c: [[T; QUADRATIC_BATCH]; 3] = core::array::from_fn(|k| lanes.map(|x| x.coeffs[k]));
+    let batch = solve_quadratic_batch_in(&c, &lanes.map(|x| x.lo), &lanes.map(|x| x.hi));
+    let bits = |r: &[T]| r.iter().map(|v| v.to_bits_u64()).collect::<Vec<_>>();
+    for (i, lane) in lanes.iter().enumerate() {
+        let scalar = solve_quadratic_in(lane.coeffs, lane.lo, lane.hi);
+        assert_eq!(
+            bits(&batch[i]),
+            bits(&scalar),
+            "batch lane {i} differs from the scalar solver: {lane:?}"
+        );
+    }
 }
 
 /// The microtriangle fuzz target: a prism (base, normals, uvs), a ray, a texture-space

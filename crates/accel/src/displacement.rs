@@ -2,9 +2,7 @@
 //! traversed by nonlinear rays (Ogaki 2023, sec. 4.4, 5.1, 5.4).
 
 use core::fmt;
-use nlrt_poly::{
-    QUADRATIC_BATCH, decided_sign, solve_cubic_in, solve_quadratic_batch_in, solve_quadratic_in,
-};
+use nlrt_poly::{QuadraticBatch, decided_sign, solve_cubic_in, solve_quadratic_in};
 use nlrt_poly::{Real, Vector2, Vector3};
 use nlrt_shellmap::{
     BaseEdges, Hit, NonlinearRay, Prism, Ray, TextureCurve, TexturePlane, alpha_beta_eq11,
@@ -1040,75 +1038,6 @@ impl<T: Real> DisplacedSurface<T> {
     #[must_use]
     pub fn bounds(&self) -> Aabb<T> {
         self.prisms.tlas.bounds()
-    }
-}
-
-/// The quadratics of one texel test (at most four faces, the diagonal, the pole and three
-/// base edges), collected by coefficient and solved eight at a time.
-struct QuadraticBatch<T: Real> {
-    coefficients: [[T; QUADRATIC_BATCH]; 3],
-    tags: [u8; QUADRATIC_BATCH],
-    len: usize,
-    /// The ninth, when all nine are solved.
-    overflow: Option<([T; 3], u8)>,
-}
-
-impl<T: Real> Default for QuadraticBatch<T> {
-    fn default() -> Self {
-        Self {
-            coefficients: [[T::ZERO; QUADRATIC_BATCH]; 3],
-            tags: [0; QUADRATIC_BATCH],
-            len: 0,
-            overflow: None,
-        }
-    }
-}
-
-impl<T: Real> QuadraticBatch<T> {
-    #[inline(always)]
-    fn add(&mut self, q: [T; 3], tag: u8) {
-        if self.len == QUADRATIC_BATCH {
-            self.overflow = Some((q, tag));
-            return;
-        }
-        for (k, c) in q.into_iter().enumerate() {
-            self.coefficients[k][self.len] = c;
-        }
-        self.tags[self.len] = tag;
-        self.len += 1;
-    }
-
-    /// `found(root, tag)` for each root in `[lo, hi]` of each quadratic, in the order they
-    /// were added, each one's roots increasing: [`solve_quadratic_in`]'s roots. A single
-    /// quadratic is solved alone (a batch would leave seven lanes idle; from two on the batch
-    /// measured faster on the fur, and as fast on the mountain, whose straight curves give
-    /// linear quadratics, than solving them one by one, `traversal_counts <scene> paper f32
-    /// 400`, 2026-12-05).
-    #[inline(always)]
-    fn solve(&self, lo: T, hi: T, mut found: impl FnMut(T, u8)) {
-        if self.len == 1 {
-            let q = [
-                self.coefficients[0][0],
-                self.coefficients[1][0],
-                self.coefficients[2][0],
-            ];
-            for &r in solve_quadratic_in(q, lo, hi).iter() {
-                found(r, self.tags[0]);
-            }
-        } else {
-            let ends = ([lo; QUADRATIC_BATCH], [hi; QUADRATIC_BATCH]);
-            let roots = solve_quadratic_batch_in(&self.coefficients, &ends.0, &ends.1);
-            for (i, r) in roots[..self.len].iter().enumerate() {
-                for &r in r.iter() {
-                    found(r, self.tags[i]);
-                }
-            }
-        }
-        if let Some((q, tag)) = self.overflow {
-            for &r in solve_quadratic_in(q, lo, hi).iter() {
-                found(r, tag);
-            }
-        }
     }
 }
 

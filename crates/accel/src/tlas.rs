@@ -210,9 +210,11 @@ impl<T: Real> PrismTlas<T> {
             &mut TraversalStats,
         ) -> Option<(H, T)>,
     ) -> Option<H> {
+        // Eq. 6's frame depends on the ray alone: set up once for all its prisms.
+        let frame = ray.perpendiculars();
         self.traverse(ray, t_min, t_max, |tri, prism, t_max| {
             stats.prism_tests += 1;
-            let nl = NonlinearRay::new(prism, ray);
+            let nl = NonlinearRay::with_perpendiculars(prism, ray, frame);
             // Eq. 6 sees the origin only through its offset across the ray, which is below
             // the prism box's size for a ray that entered the box, and the box lies within
             // `max_world_coordinate` (checked at construction): finite. A NaN curve would

@@ -53,7 +53,7 @@ pub use cubic::{first_cubic_root_in, solve_cubic, solve_cubic_in};
 pub use eval::{decided_sign, horner, horner_with_bound, horner_with_bound_scaled};
 pub use glam;
 pub use quadratic::{discriminant, quadratic_range, solve_quadratic, solve_quadratic_in};
-pub use quadratic_batch::{QUADRATIC_BATCH, solve_quadratic_batch_in};
+pub use quadratic_batch::{QUADRATIC_BATCH, QuadraticBatch, solve_quadratic_batch_in};
 pub use real::Real;
 pub use roots::Roots;
 pub use vector::{Vector2, Vector3, difference_of_products};
