@@ -161,7 +161,6 @@ pub fn fuzz_cubic_batch<T: Real>(data: &[u8]) {
     let (lo, hi) = (inputs.map(|x| x.lo), inputs.map(|x| x.hi));
     let all = solve_cubic_batch_in(&c, &lo, &hi);
     let first = first_cubic_root_batch_in(&c, &lo, &hi);
-    let bits = |r: &[T]| r.iter().map(|v| v.to_bits_u64()).collect::<Vec<_>>();
     for (i, input) in inputs.iter().enumerate() {
         let scalar = solve_cubic_in(input.coeffs, input.lo, input.hi);
         assert_eq!(
@@ -179,6 +178,11 @@ pub fn fuzz_cubic_batch<T: Real>(data: &[u8]) {
     }
 }
 
+/// The bit patterns of roots, for comparing answers exactly (signed zeros included).
+fn bits<T: Real>(roots: &[T]) -> Vec<u64> {
+    roots.iter().map(|v| v.to_bits_u64()).collect()
+}
+
 /// The quadratic fuzz target: decode, solve, check; and the batch solver on eight inputs,
 /// lane `i` decoded from the bytes after the first `i` values (lane 0 is the checked input),
 /// which must give the scalar answers bit for bit.
@@ -191,7 +195,6 @@ pub fn fuzz_quadratic<T: Real>(data: &[u8]) {
         core::array::from_fn(|i| decode::<T, 3>(&data[(i * width).min(data.len())..]));
     let c: [[T; QUADRATIC_BATCH]; 3] = core::array::from_fn(|k| lanes.map(|x| x.coeffs[k]));
     let batch = solve_quadratic_batch_in(&c, &lanes.map(|x| x.lo), &lanes.map(|x| x.hi));
-    let bits = |r: &[T]| r.iter().map(|v| v.to_bits_u64()).collect::<Vec<_>>();
     for (i, lane) in lanes.iter().enumerate() {
         let scalar = solve_quadratic_in(lane.coeffs, lane.lo, lane.hi);
         assert_eq!(

@@ -16,6 +16,7 @@
 use crate::cubic::{FAST_STEPS, fixed_steps, noise_factor};
 use crate::eval::{safe_argument_exponent, safe_coefficient_exponent};
 use crate::lanes::{LANES, LaneMask, Lanes};
+use crate::quadratic_batch::discriminant_lanes;
 use crate::{Real, Roots, first_cubic_root_in, solve_cubic_in};
 
 /// How many cubics [`solve_cubic_batch_in`] and [`first_cubic_root_batch_in`] take at once.
@@ -231,15 +232,8 @@ fn kernel<T: Real, L: Lanes<T>, const FIRST: bool>(
     };
 
     // Critical points and trigonometric guesses (`critical_points_and_guesses`,
-    // `Guesses::from_parts`); `discriminant` written out.
-    let disc = {
-        let p = d1 * d1;
-        let four_a2 = d2 * L::splat(T::from_i32(4));
-        let q = four_a2 * d0;
-        let dp = d1.mul_add(d1, -p);
-        let dq = four_a2.mul_add(d0, -q);
-        (p - q) + (dp - dq)
-    };
+    // `Guesses::from_parts`).
+    let disc = discriminant_lanes::<T, L>(d0, d1, d2);
     let inv_a2 = one / d2;
     let two_critical = disc.gt(zero);
     let one_critical = disc.eq(zero);

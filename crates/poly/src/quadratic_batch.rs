@@ -172,15 +172,8 @@ pub(crate) fn solve_into<T: Real, L: Lanes<T>>(
         & a2.gt(zero)
         & lo_l.le(hi_l);
 
-    // `roots_of_scaled` with k = 0; `discriminant` written out.
-    let d = {
-        let p = c1 * c1;
-        let four_a2 = c2 * L::splat(T::from_i32(4));
-        let q = four_a2 * c0;
-        let dp = c1.mul_add(c1, -p);
-        let dq = four_a2.mul_add(c0, -q);
-        (p - q) + (dp - dq)
-    };
+    // `roots_of_scaled` with k = 0.
+    let d = discriminant_lanes::<T, L>(c0, c1, c2);
     let real = d.ge(zero);
     let double = d.eq(zero);
     let q = (-(c1 + L::select(real, d, zero).sqrt().copysign(c1))) * L::splat(T::HALF);
@@ -256,6 +249,19 @@ pub(crate) fn solve_into<T: Real, L: Lanes<T>>(
         *o = roots;
     }
     handled
+}
+
+/// [`crate::discriminant`] lane by lane: `b^2 - 4ac` with Kahan's FMA correction, the same
+/// operations in the same order (the batch solvers of quadratics and of cubics' critical
+/// points share it).
+#[inline(always)]
+pub(crate) fn discriminant_lanes<T: Real, L: Lanes<T>>(a0: L, a1: L, a2: L) -> L {
+    let p = a1 * a1;
+    let four_a2 = a2 * L::splat(T::from_i32(4));
+    let q = four_a2 * a0;
+    let dp = a1.mul_add(a1, -p);
+    let dq = four_a2.mul_add(a0, -q);
+    (p - q) + (dp - dq)
 }
 
 #[cfg(test)]
