@@ -11,8 +11,8 @@ use nlrt_oracle::families::{RandomFamily, SplitMix64, cubic_from_roots};
 use nlrt_oracle::peers;
 use nlrt_poly::baseline::solve_cubic_closed_form_in;
 use nlrt_poly::{
-    CUBIC_BATCH, Real, Roots, first_cubic_root_batch_in, first_cubic_root_in, solve_cubic_in,
-    solve_cubics_in, solve_quadratic,
+    CUBIC_BATCH, QUADRATIC_BATCH, Real, Roots, first_cubic_root_batch_in, first_cubic_root_in,
+    solve_cubic_in, solve_cubics_in, solve_quadratic, solve_quadratic_batch_in, solve_quadratic_in,
 };
 use std::hint::black_box;
 
@@ -171,6 +171,41 @@ fn bench_batch<T: Real>(crit: &mut Criterion, group: &str, cubics: &[[T; 4]], lo
     g.finish();
 }
 
+/// The texel test's case: quadratics solved on a short interval (most roots outside it, each
+/// then checked at the end it crossed), one by one against eight at a time.
+fn bench_quadratic_batch<T: Real>(crit: &mut Criterion, quadratics: &[[T; 3]], lo: T, hi: T) {
+    let mut g = crit.benchmark_group(format!("quadratic_batch_on_a_short_interval/{}", T::NAME));
+    g.throughput(Throughput::Elements(quadratics.len() as u64));
+    g.bench_function(BenchmarkId::from_parameter("scalar"), |b| {
+        b.iter(|| {
+            quadratics
+                .iter()
+                .map(|&c| solve_quadratic_in(black_box(c), lo, hi).len())
+                .sum::<usize>()
+        })
+    });
+    // Gathered by coefficient beforehand, as `QuadraticBatch` gathers them.
+    let batches: Vec<[[T; QUADRATIC_BATCH]; 3]> = quadratics
+        .chunks_exact(QUADRATIC_BATCH)
+        .map(|chunk| core::array::from_fn(|k| core::array::from_fn(|i| chunk[i][k])))
+        .collect();
+    g.bench_function(BenchmarkId::from_parameter("batch"), |b| {
+        let (l, h) = ([lo; QUADRATIC_BATCH], [hi; QUADRATIC_BATCH]);
+        b.iter(|| {
+            batches
+                .iter()
+                .map(|c| {
+                    solve_quadratic_batch_in(black_box(c), &l, &h)
+                        .iter()
+                        .map(|r| r.len())
+                        .sum::<usize>()
+                })
+                .sum::<usize>()
+        })
+    });
+    g.finish();
+}
+
 fn bench_type<T: Real + roots::FloatType>(crit: &mut Criterion) {
     let cubics = unit_cubics::<T>();
     let (lo, hi) = (T::ZERO, T::ONE);
@@ -201,6 +236,8 @@ fn bench_type<T: Real + roots::FloatType>(crit: &mut Criterion) {
         .iter()
         .map(|c| [c[1], c[2] * T::TWO, c[3] * T::THREE])
         .collect();
+    bench_quadratic_batch(crit, &quadratics, T::from_f64(0.25), T::from_f64(0.5));
+
     let mut g = crit.benchmark_group(format!("quadratic/{}", T::NAME));
     g.throughput(Throughput::Elements(SAMPLES as u64));
     g.bench_function(BenchmarkId::from_parameter("nlrt"), |b| {
