@@ -7,11 +7,11 @@
 //! register of `f32` or two of `f64` where the build has AVX2 and FMA, eight scalars
 //! otherwise; every operation is exact or correctly rounded in all of them): the
 //! discriminant with Kahan's correction, the two stable root formulas (or the one root of a
-//! linear polynomial), and the check of a
-//! root outside the interval against the polynomial's value at the end it crossed. A lane it
-//! cannot decide exactly as the scalar solver would (a reversed or NaN interval, coefficients
-//! outside the fast path's window, a root outside the interval whose end value is not
-//! plainly beyond its rounding bound) is handed to the scalar solver.
+//! linear polynomial), and the check of a root outside the interval against the
+//! polynomial's value at the end it crossed. A lane it cannot decide exactly as the scalar
+//! solver would (a reversed or NaN interval, coefficients outside the fast path's window, a
+//! root outside the interval whose end value is not plainly beyond its rounding bound) is
+//! handed to the scalar solver.
 
 use crate::eval::safe_coefficient_exponent;
 use crate::lanes::{LANES, LaneMask, Lanes};
@@ -50,8 +50,8 @@ pub fn solve_quadratic_batch_in<T: Real>(
 
 /// Quadratics collected for one interval, each with a tag, solved eight at a time by
 /// [`solve_quadratic_batch_in`]: for a caller that decides one by one which quadratics it
-/// needs (a texel's edge lines, a box's faces) and wants their roots together. Holds up to
-/// [`QuadraticBatch::CAPACITY`].
+/// needs (a texel's edge lines, its diagonal, the base edges) and wants their roots together.
+/// Holds up to [`QuadraticBatch::CAPACITY`].
 ///
 /// ```
 /// use nlrt_poly::QuadraticBatch;
@@ -91,7 +91,8 @@ impl<T: Real> QuadraticBatch<T> {
     pub fn add(&mut self, q: [T; 3], tag: u8) {
         assert!(
             self.len < Self::CAPACITY,
-            "QuadraticBatch holds at most 16 quadratics"
+            "QuadraticBatch holds at most {} quadratics",
+            Self::CAPACITY
         );
         let (batch, lane) = (self.len / QUADRATIC_BATCH, self.len % QUADRATIC_BATCH);
         for (k, c) in q.into_iter().enumerate() {
