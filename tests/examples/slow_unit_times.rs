@@ -14,28 +14,33 @@ use nlrt_poly::Real;
 use nlrt_tests::fuzz_input::{displacement_case, shell_case};
 use std::time::Instant;
 
+/// The unit's case, or `None` after saying why it does not set up.
+fn set_up<C>(case: Result<C, String>) -> Option<C> {
+    case.map_err(|e| println!("the unit does not set up: {e}"))
+        .ok()
+}
+
+/// Runs `trace` once, timed, and prints its hit distance and counters under `label`.
+fn timed(label: &str, trace: impl FnOnce(&mut TraversalStats) -> Option<f64>) {
+    let t = Instant::now();
+    let mut stats = TraversalStats::default();
+    let distance = trace(&mut stats);
+    println!("{label}: {:?}, hit {distance:?}, {stats:?}", t.elapsed());
+}
+
 fn run<T: Real>(data: &[u8], brute: bool) {
-    let (surface, ray) = match displacement_case::<T>(data) {
-        Ok(case) => case,
-        Err(e) => {
-            println!("the unit does not set up: {e}");
-            return;
-        }
+    let Some((surface, ray)) = set_up(displacement_case::<T>(data)) else {
+        return;
     };
     println!("texel range of triangle 0: {:?}", surface.roots(0));
-    let t = Instant::now();
-    let mut stats = TraversalStats::default();
-    let hit = surface.intersect(&ray, T::ZERO, T::INFINITY, &mut stats);
-    let distance = hit.map(|h| h.hit.t.to_f64());
-    println!("nonlinear: {:?}, hit {distance:?}, {stats:?}", t.elapsed());
-    let t = Instant::now();
-    let mut stats = TraversalStats::default();
-    let hit = surface.intersect_affine(&ray, T::ZERO, T::INFINITY, &mut stats);
-    let distance = hit.map(|h| h.t.to_f64());
-    println!(
-        "tessellation-free (affine): {:?}, hit {distance:?}, {stats:?}",
-        t.elapsed()
-    );
+    timed("nonlinear", |stats| {
+        let hit = surface.intersect(&ray, T::ZERO, T::INFINITY, stats);
+        hit.map(|h| h.hit.t.to_f64())
+    });
+    timed("tessellation-free (affine)", |stats| {
+        let hit = surface.intersect_affine(&ray, T::ZERO, T::INFINITY, stats);
+        hit.map(|h| h.t.to_f64())
+    });
     let opts = MarchOptions {
         max_samples: 256,
         ..MarchOptions::default()
@@ -53,19 +58,14 @@ fn run<T: Real>(data: &[u8], brute: bool) {
 }
 
 fn run_shell<T: Real>(data: &[u8], brute: bool) {
-    let (surface, ray) = match shell_case::<T>(data) {
-        Ok(case) => case,
-        Err(e) => {
-            println!("the unit does not set up: {e}");
-            return;
-        }
+    let Some((surface, ray)) = set_up(shell_case::<T>(data)) else {
+        return;
     };
     println!("tile range of triangle 0: {:?}", surface.roots(0));
-    let t = Instant::now();
-    let mut stats = TraversalStats::default();
-    let hit = surface.intersect(&ray, T::ZERO, T::INFINITY, &mut stats);
-    let distance = hit.map(|h| h.hit.t.to_f64());
-    println!("nonlinear: {:?}, hit {distance:?}, {stats:?}", t.elapsed());
+    timed("nonlinear", |stats| {
+        let hit = surface.intersect(&ray, T::ZERO, T::INFINITY, stats);
+        hit.map(|h| h.hit.t.to_f64())
+    });
     if brute {
         let t = Instant::now();
         let hit = surface.intersect_brute_force(&ray, T::ZERO, T::INFINITY);

@@ -435,28 +435,24 @@ fn unusable_texture_coordinates_and_tilings_are_rejected() {
 /// precision (the loader checks f64 for every method).
 #[test]
 fn a_height_scale_beyond_a_precision_is_an_error_in_that_precision() {
-    let dir = scratch("scale-1e39");
-    edit(
-        &dir,
-        "bumps.toml",
-        "height_scale = 0.2",
-        "height_scale = 1e39",
-    );
-    let (code, err) = render_with(&dir, &["--precision", "f32"]);
+    // The bumps scene with `height_scale = value`, rendered in `precision`.
+    let with_scale = |value: &str| {
+        let dir = scratch(&format!("scale-{value}"));
+        let scale = format!("height_scale = {value}");
+        edit(&dir, "bumps.toml", "height_scale = 0.2", &scale);
+        move |precision: &str| render_with(&dir, &["--precision", precision])
+    };
+
+    let render = with_scale("1e39");
+    let (code, err) = render("f32");
     assert_eq!(code, Some(2), "{err}");
     assert!(err.contains("height_scale") && err.contains("f32"), "{err}");
     assert!(!err.contains("panicked"), "{err}");
-    let (code, err) = render_with(&dir, &["--precision", "f64"]);
+    let (code, err) = render("f64");
     assert_eq!(code, Some(0), "{err}");
 
-    let dir = scratch("scale-1e20");
-    edit(
-        &dir,
-        "bumps.toml",
-        "height_scale = 0.2",
-        "height_scale = 1e20",
-    );
-    let (code, err) = render_with(&dir, &["--precision", "f32"]);
+    let render = with_scale("1e20");
+    let (code, err) = render("f32");
     assert_eq!(code, Some(2), "{err}");
     assert!(
         err.contains("bumps.toml")
@@ -465,18 +461,12 @@ fn a_height_scale_beyond_a_precision_is_an_error_in_that_precision() {
             && err.contains("--precision f64"),
         "{err}"
     );
-    let (code, err) = render_with(&dir, &["--precision", "f64"]);
+    let (code, err) = render("f64");
     assert_eq!(code, Some(0), "{err}");
 
-    let dir = scratch("scale-1e300");
-    edit(
-        &dir,
-        "bumps.toml",
-        "height_scale = 0.2",
-        "height_scale = 1e300",
-    );
+    let render = with_scale("1e300");
     for precision in ["f32", "f64"] {
-        let (code, err) = render_with(&dir, &["--precision", precision]);
+        let (code, err) = render(precision);
         assert_eq!(code, Some(2), "{err}");
         assert!(
             err.contains("in f64") && err.contains("beyond the largest this precision traces"),
