@@ -286,8 +286,9 @@ impl<T: Real> ObjectEdges<T> {
             let roots = solve_cubic_in(cubic, lo - CLAMP_LIMIT::<T>(), hi + CLAMP_LIMIT::<T>());
             let mut slot = 0;
             for &h in roots.iter() {
-                let beyond = (h < near_lo && lo - h > height_window(&cubic, lo))
-                    || (h > near_hi && h - hi > height_window(&cubic, hi));
+                let window = |end| height_window(&cubic, cubic_rounding(&plane, tri, ray, end), end);
+                let beyond =
+                    (h < near_lo && lo - h > window(lo)) || (h > near_hi && h - hi > window(hi));
                 if beyond {
                     continue;
                 }
@@ -416,8 +417,10 @@ impl<T: Real> ObjectEdges<T> {
             } else {
                 neighbour.map(|c| -c)
             };
+            let separating = shifted_plane(&edge.plane, tile);
             Some(Side::new(
-                shifted_plane(&edge.plane, tile).ray_cubic(ray),
+                separating,
+                [tri[e], tri[(e + 1) % 3]],
                 first == edge.first_positive,
                 neighbour,
                 ray,
@@ -436,9 +439,13 @@ impl<T: Real> ObjectEdges<T> {
             sides
                 .iter()
                 .flatten()
-                .fold(height_window(cubic, end), |w, s| {
-                    w.max(height_window(&s.along, end))
-                })
+                .fold(
+                    height_window(cubic, cubic_rounding(plane, tri, ray, end), end),
+                    |w, s| {
+                        let formed = cubic_rounding(&s.plane, &s.ends, ray, end);
+                        w.max(height_window(&s.along, formed, end))
+                    },
+                )
         };
         let (lo, hi) = (lo - window(lo), hi + window(hi));
 
@@ -548,17 +555,22 @@ fn HEIGHT_WINDOW<T: Real>() -> T {
 }
 
 /// How far beyond `end` (a height-range end of the triangle) a root of `cubic` may lie and
-/// still be a rounding of a root at `end`: the first-order error of a root there (the Horner
-/// bound with the rounding of `h` itself, over the slope, with the safety factor of
-/// [`point_error_bound`]), at least [`HEIGHT_WINDOW`] and at most [`CLAMP_LIMIT`] (the farthest
-/// a candidate is moved in texture units: beyond it the slope is near zero, a tangency, and a
-/// point that far out is no rounding of one on the range). An edge along a triangle's highest
-/// or lowest height (the ridge of a feather's vane) puts the root of its two planes there, and
-/// an ill-conditioned cubic moves it by more than a fixed few ulps (20 ulps on feathers, f64).
-fn height_window<T: Real>(cubic: &[T; 4], end: T) -> T {
+/// still be a rounding of a root at `end`: the first-order error of a root there (the rounding
+/// of the cubic's value at `end`, `formed` from its coefficients and plane by
+/// [`cubic_rounding`] and the Horner bound from its evaluation, with the rounding of `h`
+/// itself, over the slope, with the safety factor of [`point_error_bound`]), at least
+/// [`HEIGHT_WINDOW`] and at most [`CLAMP_LIMIT`] (the farthest a candidate is moved in texture
+/// units: beyond it the slope is near zero, a tangency, and a point that far out is no
+/// rounding of one on the range). An edge along a triangle's highest or lowest height (the
+/// ridge of a feather's vane) puts the root of its two planes there, and an ill-conditioned
+/// cubic moves it by more than a fixed few ulps: 20 ulps on feathers in f64, and 285 ulps
+/// (7.9e-15) for a separating plane's crossing in a tile 49 units from the origin, whose
+/// plane offsets cancel 50-unit terms (`nlrt watertight feathers --rays 65536 --precision
+/// f64`, sample 28356).
+fn height_window<T: Real>(cubic: &[T; 4], formed: T, end: T) -> T {
     let (_, rounding) = horner_with_bound(cubic, end);
     let slope = value_and_slope(cubic, end).1.abs();
-    let error = T::from_i32(16) * (rounding + T::EPSILON * end.abs() * slope) / slope;
+    let error = T::from_i32(16) * (rounding + formed + T::EPSILON * end.abs() * slope) / slope;
     // `!(x <= y)`: a zero slope gives infinity or NaN, both capped.
     let capped = if error <= CLAMP_LIMIT::<T>() {
         error
@@ -566,6 +578,39 @@ fn height_window<T: Real>(cubic: &[T; 4], end: T) -> T {
         CLAMP_LIMIT::<T>()
     };
     capped.max(HEIGHT_WINDOW::<T>())
+}
+
+/// A bound on the error at height `h` of `plane.ray_cubic(ray)`'s value from the rounding of
+/// the cubic's coefficients and of the plane (`points`: points it was made to pass through),
+/// before any evaluation. The cubic is `n_u U + n_v V + (k + n_h h) D` (Eq. 8 in Eq. 9), each
+/// coefficient four products summed by four roundings, so its value errs by `gamma(4)` times
+/// the same sum of absolute terms; the plane's offset `k = -n . p` errs by `gamma(3) sum |n_i
+/// p_i|` and its unit normal's rounding moves its value at the points by as much, which `D`
+/// multiplies. Both are relative to the size of the coordinates, not to the cubic's
+/// coefficients: a plane in a tile far from the origin cancels terms of the tile index's size
+/// in every coefficient, which the Horner bound (relative to the coefficients) does not see.
+/// `U`, `V` and `D` are the same numbers for every plane of the ray, so their own rounding
+/// moves no plane's root against another's and is left out.
+fn cubic_rounding<T: Real>(
+    plane: &TexturePlane<T>,
+    points: &[T::Vec3],
+    ray: &NonlinearRay<T>,
+    h: T,
+) -> T {
+    let x = h.abs();
+    let magnitude = |c: &[T; 3]| (c[2].abs() * x + c[1].abs()).mul_add(x, c[0].abs());
+    let n = plane.normal;
+    let (nu, nv, nh) = (n.x().abs(), n.y().abs(), n.z().abs());
+    let offset = points.iter().fold(plane.k.abs(), |m, p| {
+        m.max(nu.mul_add(p.x().abs(), nv.mul_add(p.y().abs(), nh * p.z().abs())))
+    });
+    let terms = nu.mul_add(
+        magnitude(&ray.u),
+        nv.mul_add(magnitude(&ray.v), (offset + nh * x) * magnitude(&ray.d)),
+    );
+    // gamma(4) for the coefficients and their sums, twice gamma(3) for the plane: below
+    // 8 eps / (1 - 8 eps) = gamma(16) with room for the products of the bound's own rounding.
+    T::from_i32(16) * T::EPSILON * terms
 }
 
 /// A shared edge as the piece search needs it: where the curve crosses its separating plane,
@@ -586,16 +631,21 @@ struct Side<T: Real> {
     neighbour: [T; 4],
     /// The separating plane's cubic along the curve.
     along: [T; 4],
+    /// The separating plane (in the tile) and the edge's ends, for [`cubic_rounding`].
+    plane: TexturePlane<T>,
+    ends: [T::Vec3; 2],
 }
 
 impl<T: Real> Side<T> {
     fn new(
-        along: [T; 4],
+        plane: TexturePlane<T>,
+        ends: [T::Vec3; 2],
         positive: bool,
         neighbour: [T; 4],
         ray: &NonlinearRay<T>,
         poles: &[T],
     ) -> Self {
+        let along = plane.ray_cubic(ray);
         let mut splits = [T::ZERO; 5];
         let mut is_crossing = [false; 5];
         let mut count = 0;
@@ -633,6 +683,8 @@ impl<T: Real> Side<T> {
             ours,
             neighbour,
             along,
+            plane,
+            ends,
         }
     }
 
