@@ -286,7 +286,8 @@ impl<T: Real> ObjectEdges<T> {
             let roots = solve_cubic_in(cubic, lo - CLAMP_LIMIT::<T>(), hi + CLAMP_LIMIT::<T>());
             let mut slot = 0;
             for &h in roots.iter() {
-                let window = |end| height_window(&cubic, cubic_rounding(&plane, tri, ray, end), end);
+                let window =
+                    |end| height_window(&cubic, cubic_rounding(&plane, tri, ray, end), end);
                 let beyond =
                     (h < near_lo && lo - h > window(lo)) || (h > near_hi && h - hi > window(hi));
                 if beyond {
@@ -436,16 +437,13 @@ impl<T: Real> ObjectEdges<T> {
         // The triangle's window, and each separating plane's at the same ends (its crossing
         // at an edge on the triangle's highest or lowest height errs by its own conditioning).
         let window = |end: T| {
-            sides
-                .iter()
-                .flatten()
-                .fold(
-                    height_window(cubic, cubic_rounding(plane, tri, ray, end), end),
-                    |w, s| {
-                        let formed = cubic_rounding(&s.plane, &s.ends, ray, end);
-                        w.max(height_window(&s.along, formed, end))
-                    },
-                )
+            sides.iter().flatten().fold(
+                height_window(cubic, cubic_rounding(plane, tri, ray, end), end),
+                |w, s| {
+                    let formed = cubic_rounding(&s.plane, &s.ends, ray, end);
+                    w.max(height_window(&s.along, formed, end))
+                },
+            )
         };
         let (lo, hi) = (lo - window(lo), hi + window(hi));
 

@@ -403,6 +403,42 @@ struct Aimed<T: Real> {
     hit: Option<ShellHit<T>>,
 }
 
+/// Sample `k`: its target, the ray from `eye` aimed at it, the exact crossing where it
+/// decides and the tracer's hit; `None` when no target was drawn or the ray does not exist.
+fn aim<T: Real>(
+    surface: &ShellSurface<T>,
+    truth: &TrueShell<'_, T>,
+    open_edges: &[BaseEnds],
+    eye: T::Vec3,
+    k: usize,
+) -> Option<Aimed<T>> {
+    let target = target(surface, &truth.partners, k)?;
+    let d = target.world - DVec3::from(to_f64::<T>(eye));
+    let ray = Ray::<T>::new(
+        eye,
+        T::Vec3::new(T::from_f64(d.x), T::from_f64(d.y), T::from_f64(d.z)),
+    )?;
+    let triangles: &[u32] = if target.on_edge {
+        &target.triangles
+    } else {
+        &target.triangles[..1]
+    };
+    let t_true = truth
+        .hit_around(&ray, target.base, triangles, target.tile, 0.0)
+        .map(|h| h.0.t)
+        .filter(|_| !(target.on_edge && truth.grazes(&ray, &target)))
+        // The object's outer boundary and degenerate prisms decide nothing (see
+        // `open_base_edges`).
+        .filter(|_| !decides_nothing(open_edges[target.base], target.alpha, target.beta));
+    let hit = surface.intersect(&ray, T::ZERO, T::INFINITY, &mut TraversalStats::default());
+    Some(Aimed {
+        target,
+        ray,
+        truth: t_true,
+        hit,
+    })
+}
+
 /// Where the mapped object ends, per base triangle (see [`open_base_edges`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct BaseEnds {
@@ -499,7 +535,6 @@ pub(super) fn measure<T: Real>(
         neighbours: vertex_neighbours(surface.mesh()),
         partners: edge_partners::<T>(surface.object().triangles()),
     };
-    let partners = &truth.partners;
     let open_edges = open_base_edges(surface.mesh());
     let eye = {
         let e = scene.camera.eye;
@@ -508,33 +543,7 @@ pub(super) fn measure<T: Real>(
     let show = std::env::var_os("NLRT_SHOW_LEAKS").is_some();
     let aimed: Vec<Option<Aimed<T>>> = (0..samples)
         .into_par_iter()
-        .map(|k| {
-            let target = target(surface, partners, k)?;
-            let d = target.world - DVec3::from(to_f64::<T>(eye));
-            let ray = Ray::<T>::new(
-                eye,
-                T::Vec3::new(T::from_f64(d.x), T::from_f64(d.y), T::from_f64(d.z)),
-            )?;
-            let triangles: &[u32] = if target.on_edge {
-                &target.triangles
-            } else {
-                &target.triangles[..1]
-            };
-            let truth = truth
-                .hit_around(&ray, target.base, triangles, target.tile, 0.0)
-                .map(|h| h.0.t)
-                .filter(|_| !(target.on_edge && truth.grazes(&ray, &target)))
-                // The object's outer boundary and degenerate prisms decide nothing (see
-                // `open_base_edges`).
-                .filter(|_| !decides_nothing(open_edges[target.base], target.alpha, target.beta));
-            let hit = surface.intersect(&ray, T::ZERO, T::INFINITY, &mut TraversalStats::default());
-            Some(Aimed {
-                target,
-                ray,
-                truth,
-                hit,
-            })
-        })
+        .map(|k| aim(surface, &truth, &open_edges, eye, k))
         .collect();
     let verdicts: Vec<Verdict> = aimed
         .iter()
@@ -676,6 +685,40 @@ mod tests {
     use super::*;
     use crate::scenes::{Size, builtin};
     use crate::tracers::Nonlinear;
+
+    /// A ray aimed at a feather vane's ridge (an edge along the highest height of both its
+    /// triangles) in tile [49, 18], far from the origin: the separating plane's crossing
+    /// falls 7.9e-15 beyond the triangles' heights, and one triangle's root 6.6e-15, both
+    /// outside the height windows while these counted only the rounding of the cubic's
+    /// evaluation, not that of its coefficients and plane (whose offsets cancel terms of the
+    /// tile index's size). Each triangle then left the point to the other: the one f64 leak
+    /// of `nlrt watertight feathers --rays 65536`.
+    #[test]
+    fn a_ray_at_a_far_vane_ridge_hits_in_f64() {
+        let scene = builtin("feathers", Size::Small).expect("built-in");
+        let Nonlinear::Shell(surface) = Nonlinear::<f64>::new(&scene) else {
+            unreachable!("shell scene")
+        };
+        let truth = TrueShell {
+            surface: &surface,
+            neighbours: vertex_neighbours(surface.mesh()),
+            partners: edge_partners::<f64>(surface.object().triangles()),
+        };
+        let open_edges = open_base_edges(surface.mesh());
+        let aimed = aim(&surface, &truth, &open_edges, scene.camera.eye, 28356).expect("drawn");
+        assert_eq!(
+            (aimed.target.base, aimed.target.tile, aimed.target.on_edge),
+            (304, [49, 18], true),
+            "the sample aims at the ridge"
+        );
+        let t_true = aimed.truth.expect("the oracle decides it");
+        let hit = aimed.hit.expect("the tracer hits");
+        assert!(
+            hit.hit.t <= t_true * (1.0 + LEAK_TOLERANCE),
+            "hit at {} beyond the true crossing {t_true}",
+            hit.hit.t
+        );
+    }
 
     /// The judge confirms the tracer's hits on aimed rays, and calls the same hits moved 1%
     /// nearer ghosts and 1% farther too far.
