@@ -22,6 +22,8 @@ struct Tally {
     mismatches: usize,
     box_tests: u64,
     texel_tests: u64,
+    /// Prisms traced in `f64` (an `f32` surface's ill-conditioned ones).
+    f64_prisms: u64,
 }
 
 fn compare<T: Real>(
@@ -53,6 +55,7 @@ fn compare<T: Real>(
         tally.rays += 1;
         tally.box_tests += u64::from(stats.box_tests);
         tally.texel_tests += u64::from(stats.texel_tests);
+        tally.f64_prisms += u64::from(stats.f64_prisms);
         let agree = match (fast, brute) {
             (None, None) => true,
             (Some(a), Some(b)) => {
@@ -83,41 +86,47 @@ macro_rules! accel_tests {
         mod $t {
             use super::*;
 
-            fn check(side: usize, kind: MapKind, tiling: f64, mesh_n: usize, degenerate: bool, min_elevation: f64) {
+            fn check(side: usize, kind: MapKind, tiling: f64, mesh_n: usize, degenerate: bool, min_elevation: f64) -> Tally {
                 let tally = compare::<$t>(side, kind, tiling, mesh_n, degenerate, min_elevation, side as u64 * 31 + mesh_n as u64);
                 eprintln!("{} {side} {kind:?} x{tiling} mesh {mesh_n} degenerate {degenerate}: {tally:?}", stringify!($t));
                 assert!(tally.hits > tally.rays / 4, "the rays should mostly hit: {tally:?}");
                 assert_eq!(tally.mismatches, 0, "{tally:?}");
+                tally
             }
 
             #[test]
             fn random_map_32() {
-                check(32, MapKind::Random, 1.0, 2, false, 0.2);
+                let _ = check(32, MapKind::Random, 1.0, 2, false, 0.2);
             }
 
             #[test]
             fn spikes_128_tiled() {
-                check(128, MapKind::Spikes, 2.0, 3, false, 0.3);
+                let _ = check(128, MapKind::Spikes, 2.0, 3, false, 0.3);
             }
 
             #[test]
             fn plateaus_64_with_flat_texels() {
-                check(64, MapKind::Plateaus, 1.0, 4, false, 0.2);
+                let _ = check(64, MapKind::Plateaus, 1.0, 4, false, 0.2);
             }
 
             #[test]
             fn checker_32_tiled_3() {
-                check(32, MapKind::Checker, 3.0, 2, false, 0.3);
+                let _ = check(32, MapKind::Checker, 3.0, 2, false, 0.3);
             }
 
             #[test]
             fn uv_degenerate_triangles() {
-                check(32, MapKind::Random, 1.0, 4, true, 0.3);
+                let _ = check(32, MapKind::Random, 1.0, 4, true, 0.3);
             }
 
             #[test]
             fn grazing_rays() {
-                check(64, MapKind::Random, 1.0, 2, false, 0.02);
+                let tally = check(64, MapKind::Random, 1.0, 2, false, 0.02);
+                // Some grazing rays meet ill-conditioned prisms, which an `f32` surface traces
+                // in `f64`: both searches do, alike.
+                if <$t>::MANTISSA_DIGITS < f64::MANTISSA_DIGITS {
+                    assert!(tally.f64_prisms > 0, "{tally:?}");
+                }
             }
         }
     )*};

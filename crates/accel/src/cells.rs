@@ -9,6 +9,41 @@ use nlrt_shellmap::{BaseEdges, NonlinearRay, Prism, TextureCurve, intersect_box}
 use crate::stats::TraversalStats;
 use crate::tlas::{RootNodes, texel_floor};
 
+/// The side of a cell in texture units, and how the walk places the boundary `c` cells from
+/// the origin: at `c * size` rounded in `T`, or, for a walk in `f64` of a surface whose cells
+/// are placed in `f32` (the fallback for ill-conditioned prisms, see
+/// `DisplacedSurface::intersect_blas`), at that product rounded to `f32` (it is exact in
+/// `f64`: an integer below `2^23` times a 24-bit significand), so that the walk's split lines
+/// are the cells' edges as the surface has them, bit for bit.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct CellSize<T> {
+    /// The side of a cell.
+    pub(crate) size: T,
+    /// Whether boundaries are rounded to `f32`.
+    pub(crate) f32_lines: bool,
+}
+
+impl<T: Real> CellSize<T> {
+    /// Boundaries rounded in `T`.
+    pub(crate) fn new(size: T) -> Self {
+        Self {
+            size,
+            f32_lines: false,
+        }
+    }
+
+    /// The texture coordinate of the boundary `c` cells from the origin.
+    #[inline]
+    pub(crate) fn line(self, c: i64) -> T {
+        let x = T::from_f64(c as f64) * self.size;
+        if self.f32_lines {
+            T::from_f64(f64::from(x.to_f64() as f32))
+        } else {
+            x
+        }
+    }
+}
+
 #[derive(Clone, Copy)]
 struct Pending<T> {
     level: u32,
@@ -216,7 +251,7 @@ pub(crate) fn traverse_curve_cells<T: Real>(
     root_heights: [T; 2],
     curve: &TextureCurve<'_, T>,
     edges: &BaseEdges<T>,
-    cell_size: T,
+    cells: CellSize<T>,
     uv_tri: &CellTriangle<T>,
     t_min: T,
     t_max: &mut T,
@@ -226,7 +261,7 @@ pub(crate) fn traverse_curve_cells<T: Real>(
 ) -> bool {
     let empty = Stretch::empty();
     let mut depth = 0;
-    let cell = |c: i64| T::from_f64(c as f64) * cell_size;
+    let cell = |c: i64| cells.line(c);
     // Whether node (level, x, y) is in the root's texel range and may meet the uv triangle.
     let wanted = |level: u32, x: i32, y: i32| {
         let k = 1i64 << level;
@@ -423,7 +458,7 @@ pub(crate) fn traverse_curve_cells<T: Real>(
             && let Some((level, x, y)) = curve
                 .uv_enclosure(node.h[0], node.h[1])
                 .filter(|e| e[0] <= e[1] && e[2] <= e[3])
-                .and_then(|e| deepest_holding(node.level, node.x, node.y, e, cell_size))
+                .and_then(|e| deepest_holding(node.level, node.x, node.y, e, cells))
         {
             // The stretch goes down whole: the walk would hand it to one child per level,
             // clipped to each level's height bounds, of which the innermost are kept here.
@@ -465,7 +500,7 @@ pub(crate) fn traverse_curve_cells<T: Real>(
 }
 
 /// The deepest node strictly below node `(level, x, y)` whose square holds the uv rectangle
-/// `[u_lo, u_hi] x [v_lo, v_hi]` (`cell_size`: the uv side of a cell) as far as it lies in the
+/// `[u_lo, u_hi] x [v_lo, v_hi]` (`cells`: the cells' side and boundaries) as far as it lies in the
 /// node's square: strictly inside the lines that bound it, except where they bound the node
 /// too, as the walk's own line values (`cell(c)`) decide; the corners' cells only propose it.
 /// `None` when a split line of the node itself meets the rectangle (or it is not a number).
@@ -474,12 +509,12 @@ fn deepest_holding<T: Real>(
     x: i32,
     y: i32,
     [u_lo, u_hi, v_lo, v_hi]: [T; 4],
-    cell_size: T,
+    cells: CellSize<T>,
 ) -> Option<(u32, i32, i32)> {
-    let cell = |c: i64| T::from_f64(c as f64) * cell_size;
+    let cell = |c: i64| cells.line(c);
     let k = 1i64 << level;
     let (x0, y0) = (i64::from(x) * k, i64::from(y) * k);
-    let cell_units = T::ONE / cell_size;
+    let cell_units = T::ONE / cells.size;
     // The cell of `w` clamped to the node's cells `start..start + k` (NaN: `start`).
     let index = |w: T, start: i64| {
         let c = (w * cell_units).to_f64();
@@ -518,7 +553,7 @@ pub(crate) fn walk_cells<T: Real, const STACK_LEN: usize>(
     prism: &Prism<T>,
     curve: &TextureCurve<'_, T>,
     edges: &BaseEdges<T>,
-    cell_size: T,
+    cells: CellSize<T>,
     t_min: T,
     t_max: T,
     stats: &mut TraversalStats,
@@ -538,7 +573,7 @@ pub(crate) fn walk_cells<T: Real, const STACK_LEN: usize>(
     if !(h_lo <= h_hi) || edges.misses(h_lo, h_hi) {
         return;
     }
-    let uv_tri = CellTriangle::new(uv_in_cells(prism, cell_size));
+    let uv_tri = CellTriangle::new(uv_in_cells(prism, cells.size));
     let mut t = t_max;
     let mut stack = [Stretch::empty(); STACK_LEN];
     let complete = traverse_curve_cells(
@@ -547,7 +582,7 @@ pub(crate) fn walk_cells<T: Real, const STACK_LEN: usize>(
         [h_lo, h_hi],
         curve,
         edges,
-        cell_size,
+        cells,
         &uv_tri,
         t_min,
         &mut t,
@@ -564,15 +599,7 @@ pub(crate) fn walk_cells<T: Real, const STACK_LEN: usize>(
             stats,
             |level, x, y, t_max| {
                 let h = node_heights(level, x, y);
-                texture_box_entry(
-                    prism,
-                    curve.ray(),
-                    cell_size,
-                    (level, x, y),
-                    h,
-                    t_min,
-                    t_max,
-                )
+                texture_box_entry(prism, curve.ray(), cells, (level, x, y), h, t_min, t_max)
             },
             |x, y, t_max, stats| leaf(x, y, [T::NEG_INFINITY, T::INFINITY], t_max, stats),
         );
@@ -595,7 +622,7 @@ pub fn uv_in_cells<T: Real>(prism: &Prism<T>, cell_size: T) -> [[T; 2]; 3] {
 pub(crate) fn texture_box_entry<T: Real>(
     prism: &Prism<T>,
     ray: &NonlinearRay<T>,
-    cell_size: T,
+    cells: CellSize<T>,
     (level, x, y): (u32, i32, i32),
     [h_lo, h_hi]: [T; 2],
     t_min: T,
@@ -603,7 +630,7 @@ pub(crate) fn texture_box_entry<T: Real>(
 ) -> Option<T> {
     let k = 1i64 << level;
     let (cx0, cy0) = (i64::from(x) * k, i64::from(y) * k);
-    let cell = |c: i64| T::from_f64(c as f64) * cell_size;
+    let cell = |c: i64| cells.line(c);
     intersect_box(
         prism,
         ray,
@@ -706,7 +733,7 @@ mod tests {
                 cell(y0) + r() * (cell(k) - size),
             );
             let e = [u_lo, u_lo + size * r(), v_lo, v_lo + size * r()];
-            match deepest_holding(level, x, y, e, cell_size) {
+            match deepest_holding(level, x, y, e, CellSize::new(cell_size)) {
                 Some((l, cx, cy)) => {
                     jumps += 1;
                     assert!(l < level, "{e:?}");
@@ -749,7 +776,10 @@ mod tests {
             "{jumps} jumps, {deep} to a cell"
         );
         let nan = [f64::NAN, f64::NAN, cell(y0), cell(y0) + 0.001];
-        assert_eq!(deepest_holding(level, x, y, nan, cell_size), None);
+        assert_eq!(
+            deepest_holding(level, x, y, nan, CellSize::new(cell_size)),
+            None
+        );
     }
 
     /// The uv-triangle test of the walk keeps every square that holds a point of the

@@ -12,7 +12,7 @@ use nlrt_shellmap::{
 };
 
 use crate::bvh::{Aabb, Bvh4};
-use crate::cells::{CURVE_STACK, walk_cells};
+use crate::cells::{CURVE_STACK, CellSize, walk_cells};
 use crate::mesh::{BaseMesh, MeshError};
 use crate::object_edges::ObjectEdges;
 use crate::pose::{PoseUpdate, TlasUpdate};
@@ -400,7 +400,7 @@ impl<T: Real> ShellSurface<T> {
             prism,
             &curve,
             &BaseEdges::new(ray),
-            T::ONE,
+            CellSize::new(T::ONE),
             t_min,
             t_max,
             stats,

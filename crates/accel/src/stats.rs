@@ -12,4 +12,7 @@ pub struct TraversalStats {
     /// Base triangles whose walk along the ray's curve outgrew its fixed stack and was
     /// finished by box tests (slower, same answer).
     pub fallbacks: u32,
+    /// Prisms of an `f32` surface traced in `f64`, where Eq. 6 is ill-conditioned for the ray
+    /// (`DisplacedSurface::intersect_blas`).
+    pub f64_prisms: u32,
 }

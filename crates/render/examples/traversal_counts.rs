@@ -72,13 +72,14 @@ fn run<T: Real>(name: &str, scene: &Scene, w: usize) {
     let (hits, st, checksum) = trace_all(scene, &nl, w, h);
     let n = (w * h) as f64;
     println!(
-        "{name} {}: {:.3} s, hits {hits}, checksum {checksum:016x}, per ray: prisms {:.2} nodes {:.2} texels {:.2} fallbacks {}",
+        "{name} {}: {:.3} s, hits {hits}, checksum {checksum:016x}, per ray: prisms {:.2} nodes {:.2} texels {:.2} fallbacks {}, prisms traced in f64 {}",
         T::NAME,
         t0.elapsed().as_secs_f64(),
         f64::from(st.prism_tests) / n,
         f64::from(st.box_tests) / n,
         f64::from(st.texel_tests) / n,
-        st.fallbacks
+        st.fallbacks,
+        st.f64_prisms
     );
 }
 

@@ -44,7 +44,9 @@ pub use microtriangle::{
 };
 pub use prism::{Canonical, Prism, onto_base_triangle};
 pub use prism_hit::{PrismSpan, intersect_prism};
-pub use ray::{BaseEdges, NonlinearRay, Ray, decidedly_outside_in_f64, max_world_coordinate};
+pub use ray::{
+    BaseEdges, NonlinearRay, Ray, decidedly_outside_in_f64, in_f64, max_world_coordinate,
+};
 
 /// The README's examples, run by `cargo test --doc`.
 #[cfg(doctest)]

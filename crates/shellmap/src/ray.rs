@@ -68,6 +68,18 @@ pub fn decidedly_outside_in_f64<T: Real>(prism: &Prism<T>, ray: &Ray<T>, k: usiz
     if T::MANTISSA_DIGITS >= f64::MANTISSA_DIGITS || k > 2 {
         return false;
     }
+    let (_, curve) = in_f64(prism, ray);
+    BaseEdges::new(&curve).decidedly_outside(k, h.to_f64())
+}
+
+/// `prism` and `ray` in `f64` (each value converted exactly) and the nonlinear ray of the two
+/// computed in `f64` in an exact frame: Eq. 6's two vectors perpendicular to the direction are
+/// its cross products with the two coordinate axes other than its largest component's
+/// (independent, and exact in `f64` for an `f32` direction: each component a product of two
+/// of its components, or 0), unlike a rounded orthonormal basis. For `f32` inputs this is
+/// the curve of the very same ray and prism, with about 29 more bits.
+#[must_use]
+pub fn in_f64<T: Real>(prism: &Prism<T>, ray: &Ray<T>) -> (Prism<f64>, NonlinearRay<f64>) {
     use nlrt_poly::glam::DVec3;
     let prism = Prism::<f64>::new(
         prism.p.map(Vector3::to_dvec3),
@@ -75,8 +87,6 @@ pub fn decidedly_outside_in_f64<T: Real>(prism: &Prism<T>, ray: &Ray<T>, k: usiz
         prism.uv.map(Vector2::to_dvec2),
     );
     let dir = ray.dir.to_dvec3();
-    // The two axes other than the direction's largest component: their cross products with
-    // it are independent, and exact (each component a component of `dir`, or 0).
     let largest = Vector3::max_abs_axis(dir);
     let axes = [DVec3::X, DVec3::Y, DVec3::Z];
     let frame = [
@@ -88,7 +98,7 @@ pub fn decidedly_outside_in_f64<T: Real>(prism: &Prism<T>, ray: &Ray<T>, k: usiz
         dir,
     };
     let curve = NonlinearRay::with_perpendiculars(&prism, &ray, frame);
-    BaseEdges::new(&curve).decidedly_outside(k, h.to_f64())
+    (prism, curve)
 }
 
 /// A linear function `c0 + c1 h`.
@@ -158,6 +168,22 @@ pub struct NonlinearRay<T: Real> {
 }
 
 impl<T: Real> NonlinearRay<T> {
+    /// The condition number of Eq. 6's 2x2 system at height `h`: `(|a e| + |b c|) / |a e - b
+    /// c|` for the rows `a alpha + b beta = r`, `c alpha + e beta = s` (infinite where the
+    /// determinant vanishes, NaN where the rows are not finite). The determinant is the
+    /// curve's denominator `D(h)`; where it cancels (the ray nearly parallel to the prism's
+    /// layer at `h`), every coefficient of the curve carries a relative error of about this
+    /// number times the unit roundoff, which no bound on the later steps sees.
+    #[must_use]
+    pub fn condition(&self, h: T) -> T {
+        let at = |l: Linear<T>| l[1].mul_add(h, l[0]);
+        let ([a, b], [c, e]) = (
+            [at(self.rows[0][0]), at(self.rows[0][1])],
+            [at(self.rows[1][0]), at(self.rows[1][1])],
+        );
+        ((a * e).abs() + (b * c).abs()) / difference_of_products(a, e, b, c).abs()
+    }
+
     /// The nonlinear ray of `ray` in `prism`.
     #[must_use]
     pub fn new(prism: &Prism<T>, ray: &Ray<T>) -> Self {
