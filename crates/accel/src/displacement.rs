@@ -651,6 +651,13 @@ impl<T: Real> DisplacedSurface<T> {
     /// misses the base triangle's uv triangle skipped (texel discard), and per texel
     /// the watertight piece search of [`DisplacedSurface::intersect_texel`], each plane's
     /// cubic solved only on the height interval of its piece.
+    ///
+    /// On an `f32` surface, a prism where Eq. 6 is ill-conditioned for the ray (the ray
+    /// nearly parallel to its layers: [`NonlinearRay::condition`] above 256 at the height 0,
+    /// 1/2 or 1) is traced in `f64` from the same inputs, widened exactly, on the same texels
+    /// ([`nlrt_shellmap::in_f64`]), and the hit rounded back: the `f32` curve's own error
+    /// there would move hits by more than its rounding bounds see (counted in
+    /// [`TraversalStats::f64_prisms`]).
     pub fn intersect_blas(
         &self,
         tri: usize,
