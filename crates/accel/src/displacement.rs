@@ -667,15 +667,48 @@ impl<T: Real> DisplacedSurface<T> {
         t_max: T,
         stats: &mut TraversalStats,
     ) -> Option<SurfaceHit<T>> {
+        self.search(Search::Walk, tri, prism, ray, t_min, t_max, stats)
+    }
+
+    /// `search` over triangle `tri` in `T`, or in `f64` where [`traced_in_f64`] says so.
+    #[allow(clippy::too_many_arguments)]
+    fn search(
+        &self,
+        search: Search,
+        tri: usize,
+        prism: &Prism<T>,
+        ray: &NonlinearRay<T>,
+        t_min: T,
+        t_max: T,
+        stats: &mut TraversalStats,
+    ) -> Option<SurfaceHit<T>> {
         if traced_in_f64(ray) {
             stats.f64_prisms += 1;
             let (prism, ray) = nlrt_shellmap::in_f64(prism, &ray.ray);
             let (t_min, t_max) = (t_min.to_f64(), t_max.to_f64());
             return self
-                .walk_blas::<f64, CURVE_STACK>(tri, &prism, &ray, t_min, t_max, stats)
+                .search_in(search, tri, &prism, &ray, t_min, t_max, stats)
                 .map(SurfaceHit::narrowed);
         }
-        self.walk_blas::<T, CURVE_STACK>(tri, prism, ray, t_min, t_max, stats)
+        self.search_in(search, tri, prism, ray, t_min, t_max, stats)
+    }
+
+    /// `search` over triangle `tri` computed in `C`.
+    #[allow(clippy::too_many_arguments)]
+    fn search_in<C: Real>(
+        &self,
+        search: Search,
+        tri: usize,
+        prism: &Prism<C>,
+        ray: &NonlinearRay<C>,
+        t_min: C,
+        t_max: C,
+        stats: &mut TraversalStats,
+    ) -> Option<SurfaceHit<C>> {
+        match search {
+            Search::Walk => self.walk_blas::<C, CURVE_STACK>(tri, prism, ray, t_min, t_max, stats),
+            Search::EveryTexel => self.brute_force_in(tri, prism, ray, t_min, t_max),
+        }
     }
 
     /// [`DisplacedSurface::intersect_blas`] computed in `C` (`T`, or `f64` for an
@@ -737,14 +770,16 @@ impl<T: Real> DisplacedSurface<T> {
         t_min: T,
         t_max: T,
     ) -> Option<SurfaceHit<T>> {
-        if traced_in_f64(ray) {
-            let (prism, ray) = nlrt_shellmap::in_f64(prism, &ray.ray);
-            let (t_min, t_max) = (t_min.to_f64(), t_max.to_f64());
-            return self
-                .brute_force_in(tri, &prism, &ray, t_min, t_max)
-                .map(SurfaceHit::narrowed);
-        }
-        self.brute_force_in(tri, prism, ray, t_min, t_max)
+        let mut stats = TraversalStats::default();
+        self.search(
+            Search::EveryTexel,
+            tri,
+            prism,
+            ray,
+            t_min,
+            t_max,
+            &mut stats,
+        )
     }
 
     /// [`DisplacedSurface::intersect_blas_brute_force`] computed in `C`.
@@ -1071,6 +1106,15 @@ impl<T: Real> DisplacedSurface<T> {
     pub fn bounds(&self) -> Aabb<T> {
         self.prisms.tlas.bounds()
     }
+}
+
+/// How a base triangle's texels are searched.
+#[derive(Clone, Copy)]
+enum Search {
+    /// The BLAS walk ([`DisplacedSurface::intersect_blas`]).
+    Walk,
+    /// Every texel of the triangle's uv box (the test reference).
+    EveryTexel,
 }
 
 /// Condition number of Eq. 6 ([`NonlinearRay::condition`]) beyond which a prism of an `f32`

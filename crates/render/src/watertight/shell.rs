@@ -179,7 +179,15 @@ struct TrueShell<'a, T: Real> {
     partners: Vec<[Option<u32>; 3]>,
 }
 
-impl<T: Real> TrueShell<'_, T> {
+impl<'a, T: Real> TrueShell<'a, T> {
+    fn new(surface: &'a ShellSurface<T>) -> Self {
+        Self {
+            surface,
+            neighbours: vertex_neighbours(surface.mesh()),
+            partners: edge_partners::<T>(surface.object().triangles()),
+        }
+    }
+
     /// The nearest true hit at `t >= t_min` of `ray` on object triangle `k` of `tile` in the
     /// prism of base triangle `base`.
     fn hit_in(
@@ -530,11 +538,7 @@ pub(super) fn measure<T: Real>(
     judged_hits: JudgedHits,
     start: std::time::Instant,
 ) -> LeakReport {
-    let truth = TrueShell {
-        surface,
-        neighbours: vertex_neighbours(surface.mesh()),
-        partners: edge_partners::<T>(surface.object().triangles()),
-    };
+    let truth = TrueShell::new(surface);
     let open_edges = open_base_edges(surface.mesh());
     let eye = {
         let e = scene.camera.eye;
@@ -686,6 +690,15 @@ mod tests {
     use crate::scenes::{Size, builtin};
     use crate::tracers::Nonlinear;
 
+    /// A built-in shell scene at small size and its `f64` surface.
+    fn small_shell_scene(name: &str) -> (Scene, ShellSurface<f64>) {
+        let scene = builtin(name, Size::Small).expect("built-in");
+        let Nonlinear::Shell(surface) = Nonlinear::<f64>::new(&scene) else {
+            unreachable!("{name} is a shell scene")
+        };
+        (scene, surface)
+    }
+
     /// A ray aimed at a feather vane's ridge (an edge along the highest height of both its
     /// triangles) in tile [49, 18], far from the origin: the separating plane's crossing
     /// falls 7.9e-15 beyond the triangles' heights, and one triangle's root 6.6e-15, both
@@ -695,15 +708,8 @@ mod tests {
     /// of `nlrt watertight feathers --rays 65536`.
     #[test]
     fn a_ray_at_a_far_vane_ridge_hits_in_f64() {
-        let scene = builtin("feathers", Size::Small).expect("built-in");
-        let Nonlinear::Shell(surface) = Nonlinear::<f64>::new(&scene) else {
-            unreachable!("shell scene")
-        };
-        let truth = TrueShell {
-            surface: &surface,
-            neighbours: vertex_neighbours(surface.mesh()),
-            partners: edge_partners::<f64>(surface.object().triangles()),
-        };
+        let (scene, surface) = small_shell_scene("feathers");
+        let truth = TrueShell::new(&surface);
         let open_edges = open_base_edges(surface.mesh());
         let aimed = aim(&surface, &truth, &open_edges, scene.camera.eye, 28356).expect("drawn");
         assert_eq!(
@@ -724,15 +730,8 @@ mod tests {
     /// nearer ghosts and 1% farther too far.
     #[test]
     fn the_oracle_judges_moved_shell_hits() {
-        let scene = builtin("highpoly", Size::Small).expect("built-in");
-        let Nonlinear::Shell(surface) = Nonlinear::<f64>::new(&scene) else {
-            unreachable!("shell scene")
-        };
-        let truth = TrueShell {
-            surface: &surface,
-            neighbours: vertex_neighbours(surface.mesh()),
-            partners: edge_partners::<f64>(surface.object().triangles()),
-        };
+        let (scene, surface) = small_shell_scene("highpoly");
+        let truth = TrueShell::new(&surface);
         let eye = scene.camera.eye;
         let mut judged = 0;
         for k in 0..64 {
@@ -773,10 +772,7 @@ mod tests {
     /// edges end it everywhere.
     #[test]
     fn the_object_ends_at_edges_to_degenerate_prisms() {
-        let scene = builtin("fig9", Size::Small).expect("built-in");
-        let Nonlinear::Shell(surface) = Nonlinear::<f64>::new(&scene) else {
-            unreachable!("shell scene")
-        };
+        let (_, surface) = small_shell_scene("fig9");
         let open = open_base_edges(surface.mesh());
         // Triangle 2c is (0, 1, 2): its diagonal is edge 0 (alpha = 0); triangle 2c + 1 is
         // (0, 2, 3): its diagonal is edge 1 (beta = 0).
