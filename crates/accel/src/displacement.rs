@@ -6,7 +6,7 @@ use nlrt_poly::{QuadraticBatch, decided_sign, solve_cubic_in, solve_quadratic_in
 use nlrt_poly::{Real, Vector2, Vector3};
 use nlrt_shellmap::{
     BaseEdges, Hit, NonlinearRay, Prism, Ray, TextureCurve, TexturePlane, alpha_beta_eq11,
-    decidedly_outside_in_f64, facing_unit, world_normal,
+    facing_unit, root_decidedly_outside_in_f64, world_normal,
 };
 
 use crate::bvh::{Aabb, Bvh4};
@@ -354,9 +354,30 @@ impl<T: Real> DisplacedSurface<T> {
     /// [`DisplacedSurface::texel_geometry`] in `C`: each value computed in `T`, then converted
     /// (exactly, from `f32` to `f64` or to itself).
     fn texel_geometry_in<C: Real>(&self, x: i32, y: i32) -> ([C; 4], [C; 4]) {
-        let (uv, h) = self.texel_geometry(x, y);
-        let widen = |v: T| C::from_f64(v.to_f64());
-        (uv.map(widen), h.map(widen))
+        let c = self.field.texel_corners(i64::from(x), i64::from(y));
+        let uv = [x, y, x + 1, y + 1].map(|i| self.coord_in::<C>(i));
+        (uv, c.map(Self::height_in::<C>))
+    }
+
+    /// [`DisplacedSurface::height`] in `C`: the value in `T`, converted (computed in `C`
+    /// directly where `C` is `T`: the same value without two conversions per sample).
+    #[inline]
+    fn height_in<C: Real>(s: u16) -> C {
+        if C::MANTISSA_DIGITS == T::MANTISSA_DIGITS {
+            C::from_i32(i32::from(s)) / C::from_i32(i32::from(HEIGHT_ONE))
+        } else {
+            C::from_f64(Self::height(s).to_f64())
+        }
+    }
+
+    /// The texture coordinate of cell boundary `i` in `C`, as [`DisplacedSurface::height_in`].
+    #[inline]
+    fn coord_in<C: Real>(&self, i: i32) -> C {
+        if C::MANTISSA_DIGITS == T::MANTISSA_DIGITS {
+            C::from_i32(i) * C::from_f64(self.texel_size.to_f64())
+        } else {
+            C::from_f64(self.coord(i).to_f64())
+        }
     }
 
     /// The nearest hit on texel `(x, y)` with `t` in `[t_min, t_max]`.
@@ -390,6 +411,7 @@ impl<T: Real> DisplacedSurface<T> {
     /// [`DisplacedSurface::intersect_texel`] with the base edges and the texture curve's error
     /// bounds computed once per prism.
     #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
     fn texel_hit<C: Real>(
         &self,
         prism: &Prism<C>,
@@ -593,6 +615,7 @@ impl<T: Real> DisplacedSurface<T> {
             if let Some(lower) = here {
                 let (b, edge_b) = splits[i + 1];
                 let (cubic, abh, part) = side(lower);
+                let plane = if lower { &plane_l } else { &plane_u };
                 if a == C::ZERO
                     && let Some(hit) = floor_hit(b, t_max)
                 {
@@ -618,16 +641,30 @@ impl<T: Real> DisplacedSurface<T> {
                     // one that lies beyond doubt across the edge is the neighbour's (its piece
                     // covers that height, its window holding the exact crossing), and this
                     // plane's continuation there is no surface (an f32 ghost hit in front of
-                    // the neighbour's true one, where the window reaches far outside).
+                    // the neighbour's true one, where the window reaches far outside). Decided
+                    // at the f64 root (the f32 root's own error can carry it across the edge
+                    // where the surface is crossed at the edge itself). Not where the curve
+                    // also crosses a texel edge or the diagonal within the window: the
+                    // neighbour's curve, rounded otherwise, may see that crossing on the other
+                    // side of the base edge and search the other plane there (one f32 leak
+                    // of the torus at 1M rays, each prism leaving the other its root).
                     let across = if r < a && edge >= 6 {
-                        Some(edge - 6)
+                        Some((edge, a))
                     } else if r > b && edge_b >= 6 {
-                        Some(edge_b - 6)
+                        Some((edge_b, b))
                     } else {
                         None
                     };
-                    if let Some(k) = across
-                        && decidedly_outside_in_f64(prism, &ray.ray, usize::from(k), r)
+                    if let Some((edge, at)) = across
+                        && !texel_split_beyond(splits, at, r, edge_window(edge, at))
+                        && root_decidedly_outside_in_f64(
+                            prism,
+                            &ray.ray,
+                            plane,
+                            usize::from(edge - 6),
+                            r,
+                            [lo, hi],
+                        )
                     {
                         continue;
                     }
@@ -743,7 +780,7 @@ impl<T: Real> DisplacedSurface<T> {
             stats,
             |level, x, y| {
                 let [lo, hi] = self.field.texel_bounds(level, i64::from(x), i64::from(y));
-                [widen(Self::height(lo)), widen(Self::height(hi))]
+                [Self::height_in::<C>(lo), Self::height_in::<C>(hi)]
             },
             |x, y, _, t_max, stats| {
                 stats.texel_tests += 1;
@@ -1108,6 +1145,19 @@ impl<T: Real> DisplacedSurface<T> {
     }
 }
 
+/// Whether a split point of the texel's own edges or diagonal (tags 0-4 of the texel test)
+/// lies within `window` of the base-edge crossing `at`, at or beyond the root `r` seen from
+/// `at`: the stretch between the crossing and that split, where `r` lies, may be on the other
+/// side of the split in the neighbouring prism's curve.
+fn texel_split_beyond<C: Real>(splits: &[(C, u8)], at: C, r: C, window: C) -> bool {
+    splits.iter().any(|&(s, tag)| {
+        tag == 4 && !((s - at).abs() > window) && (s - at) * (r - at) >= C::ZERO && {
+            let (near, far) = ((r - at).abs(), (s - at).abs());
+            near <= far
+        }
+    })
+}
+
 /// How a base triangle's texels are searched.
 #[derive(Clone, Copy)]
 enum Search {
@@ -1127,13 +1177,14 @@ const F64_CONDITION: f64 = 256.0;
 
 /// Whether a prism's nonlinear ray in `T` is traced in `f64` instead: `T` is narrower and
 /// Eq. 6's condition at the heights 0, 1/2 or 1 exceeds [`F64_CONDITION`] (or is not a
-/// number). The samples decide which precision traces the prism, not any answer: either
+/// number, or the determinant vanishes there). The samples decide which precision traces the prism, not any answer: either
 /// walk is watertight in its own arithmetic.
 fn traced_in_f64<T: Real>(ray: &NonlinearRay<T>) -> bool {
+    let limit = T::from_f64(F64_CONDITION);
     T::MANTISSA_DIGITS < f64::MANTISSA_DIGITS
-        && [T::ZERO, T::HALF, T::ONE]
+        && ![T::ZERO, T::HALF, T::ONE]
             .into_iter()
-            .any(|h| !(ray.condition(h).to_f64() <= F64_CONDITION))
+            .all(|h| ray.condition_at_most(h, limit))
 }
 
 impl SurfaceHit<f64> {

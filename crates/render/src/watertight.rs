@@ -1260,6 +1260,30 @@ mod tests {
         assert_eq!(hits, 2);
     }
 
+    /// A ray of the torus (`nlrt watertight torus --rays 1000000`, pixel (598, 874)) that
+    /// meets the surface where a texel's diagonal crosses the base edge between triangles
+    /// 7580 and 7581: the texel test of each prism, in `f32`, saw the diagonal on the other
+    /// side of the edge crossing than its neighbour did, and each left its root in the
+    /// edge's window to the other as lying beyond doubt across the edge (decided in `f64`),
+    /// where the other searched the other microtriangle's plane: a leak. Roots between the
+    /// edge crossing and a diagonal crossing within the edge's window are kept.
+    #[test]
+    fn a_ray_through_a_diagonal_at_a_base_edge_hits_in_f32() {
+        let scene = builtin("torus", Size::Small).expect("built-in");
+        let Nonlinear::Displaced(surface) = Nonlinear::<f32>::new(&scene) else {
+            unreachable!("displacement scene")
+        };
+        let truth = TrueSurface::new(&surface);
+        let n = 1000;
+        let ray = grid_ray::<f32>(&scene, n, 874 * n + 598).expect("a camera ray");
+        let hit = surface
+            .intersect(&ray, 0.0, f32::INFINITY, &mut TraversalStats::default())
+            .expect("the ray hits");
+        // The ray reaches base triangle 7452 at t = 1.83 from outside: the hit lies before.
+        assert!(hit.hit.t < 1.83, "{hit:?}");
+        assert_eq!(truth.judge(&ray, &hit), HitJudgement::Confirmed, "{hit:?}");
+    }
+
     #[test]
     fn criteria_follow_the_mesh_and_the_map() {
         let all = |name: &str| criteria(&builtin(name, Size::Small).unwrap());

@@ -72,6 +72,40 @@ pub fn decidedly_outside_in_f64<T: Real>(prism: &Prism<T>, ray: &Ray<T>, k: usiz
     BaseEdges::new(&curve).decidedly_outside(k, h.to_f64())
 }
 
+/// Whether a root `r` of `plane`'s cubic along the curve of `ray` in `prism`, found in `T` on
+/// `[lo, hi]`, lies beyond doubt outside the base triangle across edge `k`: as
+/// [`decidedly_outside_in_f64`], at the `f64` root of the same plane (its values widened
+/// exactly) nearest `r` on `[lo, hi]`, or at `r` where `f64` finds none there. The `T` root
+/// errs by its cubic's rounding, which carries it across the edge where the ray crosses the
+/// surface on the edge itself: each of two `f32` prisms then found its root on the other's
+/// side and left it to the other (one `f32` leak of the torus at 1M rays, 2026-12-05: roots
+/// 3e-7 from the `f64` ones, about 20 ulps). `false` for `f64`.
+#[must_use]
+pub fn root_decidedly_outside_in_f64<T: Real>(
+    prism: &Prism<T>,
+    ray: &Ray<T>,
+    plane: &crate::TexturePlane<T>,
+    k: usize,
+    r: T,
+    [lo, hi]: [T; 2],
+) -> bool {
+    if T::MANTISSA_DIGITS >= f64::MANTISSA_DIGITS || k > 2 {
+        return false;
+    }
+    let (_, curve) = in_f64(prism, ray);
+    let plane = crate::TexturePlane::<f64> {
+        normal: plane.normal.to_dvec3(),
+        k: plane.k.to_f64(),
+    };
+    let r = r.to_f64();
+    let h = nlrt_poly::solve_cubic_in(plane.ray_cubic(&curve), lo.to_f64(), hi.to_f64())
+        .iter()
+        .copied()
+        .min_by(|a, b| (a - r).abs().total_cmp(&(b - r).abs()))
+        .unwrap_or(r);
+    BaseEdges::new(&curve).decidedly_outside(k, h)
+}
+
 /// `prism` and `ray` in `f64` (each value converted exactly) and the nonlinear ray of the two
 /// computed in `f64` in an exact frame: Eq. 6's two vectors perpendicular to the direction are
 /// its cross products with the two coordinate axes other than its largest component's
@@ -176,12 +210,32 @@ impl<T: Real> NonlinearRay<T> {
     /// number times the unit roundoff, which no bound on the later steps sees.
     #[must_use]
     pub fn condition(&self, h: T) -> T {
+        let (magnitude, determinant) = self.eq6_terms(h);
+        magnitude / determinant.abs()
+    }
+
+    /// Whether [`NonlinearRay::condition`] at `h` is at most `limit` (`false` where it is not
+    /// a number or the determinant is 0), without its division.
+    #[must_use]
+    #[inline]
+    pub fn condition_at_most(&self, h: T, limit: T) -> bool {
+        let (magnitude, determinant) = self.eq6_terms(h);
+        let determinant = determinant.abs();
+        determinant > T::ZERO && magnitude <= limit * determinant
+    }
+
+    /// `(|a e| + |b c|, a e - b c)` of Eq. 6's rows at `h`.
+    #[inline]
+    fn eq6_terms(&self, h: T) -> (T, T) {
         let at = |l: Linear<T>| l[1].mul_add(h, l[0]);
         let ([a, b], [c, e]) = (
             [at(self.rows[0][0]), at(self.rows[0][1])],
             [at(self.rows[1][0]), at(self.rows[1][1])],
         );
-        ((a * e).abs() + (b * c).abs()) / difference_of_products(a, e, b, c).abs()
+        (
+            (a * e).abs() + (b * c).abs(),
+            difference_of_products(a, e, b, c),
+        )
     }
 
     /// The nonlinear ray of `ray` in `prism`.
