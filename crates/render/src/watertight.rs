@@ -1194,6 +1194,15 @@ mod tests {
     use super::*;
     use crate::scenes::{Size, builtin};
 
+    /// A built-in displacement scene at small size and its `f32` surface.
+    fn small_f32_displaced(name: &str) -> (Scene, nlrt_accel::DisplacedSurface<f32>) {
+        let scene = builtin(name, Size::Small).expect("built-in");
+        let Nonlinear::Displaced(surface) = Nonlinear::<f32>::new(&scene) else {
+            unreachable!("{name} is a displacement scene")
+        };
+        (scene, surface)
+    }
+
     /// The judge confirms the tracer's hits, and calls the same hits moved 1% nearer ghosts
     /// and 1% farther too far (the surface is not there; a nearer one is).
     #[test]
@@ -1236,10 +1245,7 @@ mod tests {
     /// ray misses, the other two hits are confirmed.
     #[test]
     fn ill_conditioned_f32_prisms_are_traced_in_f64() {
-        let scene = builtin("torus-twisted", Size::Small).expect("built-in");
-        let Nonlinear::Displaced(surface) = Nonlinear::<f32>::new(&scene) else {
-            unreachable!("displacement scene")
-        };
+        let (scene, surface) = small_f32_displaced("torus-twisted");
         let truth = TrueSurface::new(&surface);
         let n = 256;
         let mut hits = 0;
@@ -1269,10 +1275,7 @@ mod tests {
     /// edge crossing and a diagonal crossing within the edge's window are kept.
     #[test]
     fn a_ray_through_a_diagonal_at_a_base_edge_hits_in_f32() {
-        let scene = builtin("torus", Size::Small).expect("built-in");
-        let Nonlinear::Displaced(surface) = Nonlinear::<f32>::new(&scene) else {
-            unreachable!("displacement scene")
-        };
+        let (scene, surface) = small_f32_displaced("torus");
         let truth = TrueSurface::new(&surface);
         let n = 1000;
         let ray = grid_ray::<f32>(&scene, n, 874 * n + 598).expect("a camera ray");
