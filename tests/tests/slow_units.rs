@@ -100,10 +100,28 @@ fn slow_units_walk_a_bounded_number_of_nodes() {
 
 /// The f32 target's units: `affine-box-walk` is slow for the affine baseline only (the walk
 /// rejects its ray at once); `long-column-miss` is refused at set-up (a normal beyond
-/// `max_world_coordinate`).
+/// `max_world_coordinate`); `pole-sweep` below.
 #[test]
 fn slow_units_walk_a_bounded_number_of_nodes_f32() {
     walk_is_bounded("displacement_f32", displacement_walk::<f32>);
+}
+
+/// `pole-sweep`: a prism 2e9 units wide whose curve's denominator changes sign at `h =
+/// 2.8e-4`, where the `f32` curve's uv error bounds, growing as `1 / |D|`, admitted every
+/// texel near that height: 481M node tests and 225M texel tests (129 s in release) for no
+/// hit. A prism whose curve has a pole inside the shell is traced in `f64`, which rejects the
+/// ray at once.
+#[test]
+fn a_pole_inside_the_shell_is_walked_in_f64() {
+    let path =
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../fuzz/slow/displacement_f32/pole-sweep");
+    let data = std::fs::read(path).expect("the slow units are committed");
+    let (surface, ray) = displacement_case::<f32>(&data).expect("the unit sets up");
+    let mut stats = TraversalStats::default();
+    let hit = surface.intersect(&ray, 0.0, f32::INFINITY, &mut stats);
+    assert_eq!(stats.f64_prisms, 1, "{stats:?}");
+    assert!(stats.box_tests < 1000, "{stats:?}");
+    assert!(hit.is_none());
 }
 
 /// The shell target's unit `tile-walk`: refused at set-up (a position beyond
