@@ -198,10 +198,10 @@ pub struct DistanceError {
 /// a true hit lies within [`LEAK_TOLERANCE`] (relative) of its distance. Otherwise it is too
 /// far when a nearer true hit is there (the tracer passed the surface); when the nearest true
 /// hit there is farther or absent, it is grazing if the point the tracer reports lies on the
-/// true surface within the tolerance (the exact ray passes that close to the surface without
-/// touching it, at a silhouette: conservative rounding, which is what keeps the tracer from
-/// leaking, turns such a near miss into a hit) and a ghost if not (a surface reported where
-/// there is none).
+/// true surface within the tolerance times its distance, in world space (the exact ray
+/// passes that close to the surface without touching it, at a silhouette: conservative
+/// rounding, which is what keeps the tracer from leaking, turns such a near miss into a hit)
+/// and a ghost if not (a surface reported where there is none).
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct GhostCount {
     /// Hits judged (every ray of the grid that hit).
