@@ -1197,17 +1197,8 @@ impl SurfaceHit<f64> {
     /// The hit of an `f64` walk, each value rounded to `T` (a distance in `[t_min, t_max]` of
     /// `T` stays there).
     fn narrowed<T: Real>(self) -> SurfaceHit<T> {
-        let h = self.hit;
-        let n = T::from_f64;
         SurfaceHit {
-            hit: Hit {
-                t: n(h.t),
-                alpha: n(h.alpha),
-                beta: n(h.beta),
-                h: n(h.h),
-                u: n(h.u),
-                v: n(h.v),
-            },
+            hit: self.hit.narrowed(),
             triangle: self.triangle,
             texel: self.texel,
             part: self.part,

@@ -6,9 +6,11 @@
 
 use alloc::vec::Vec;
 use core::fmt;
+use nlrt_poly::glam::DVec3;
 use nlrt_poly::{Real, Vector3};
 use nlrt_shellmap::{
-    BaseEdges, Hit, NonlinearRay, Prism, Ray, TextureCurve, TexturePlane, facing_unit, world_normal,
+    BaseEdges, Hit, NonlinearRay, Prism, Ray, TextureCurve, TexturePlane, WideRay, facing_unit,
+    world_normal,
 };
 
 use crate::bvh::{Aabb, Bvh4};
@@ -75,8 +77,11 @@ pub struct ShellObject<T: Real> {
     triangles: Vec<[T::Vec3; 3]>,
     bvh: Bvh4<T>,
     h_range: [T; 2],
-    /// The edges two triangles share, made watertight.
-    edges: ObjectEdges<T>,
+    /// The edges two triangles share, made watertight, for a trace in `T` (`T` is `f64`)...
+    edges: Option<ObjectEdges<T>>,
+    /// ... or, from the triangles widened exactly, for the trace in `f64` of a narrower `T`
+    /// (see [`ShellSurface::intersect_blas`]).
+    edges_f64: Option<ObjectEdges<f64>>,
     /// Triangles dropped because their three points are collinear (no plane).
     pub dropped_degenerate: usize,
 }
@@ -114,12 +119,18 @@ impl<T: Real> ShellObject<T> {
             .collect();
         let bvh = Bvh4::build(&boxes, 4);
         let b = bvh.bounds();
-        let edges = ObjectEdges::new(&kept);
+        let (edges, edges_f64) = if traced_in_f64::<T>() {
+            let wide: Vec<[DVec3; 3]> = kept.iter().map(|t| t.map(Vector3::to_dvec3)).collect();
+            (None, Some(ObjectEdges::new(&wide)))
+        } else {
+            (Some(ObjectEdges::new(&kept)), None)
+        };
         Ok(Self {
             triangles: kept,
             bvh,
             h_range: [b.lo[2], b.hi[2]],
             edges,
+            edges_f64,
             dropped_degenerate: dropped,
         })
     }
@@ -135,7 +146,8 @@ impl<T: Real> ShellObject<T> {
     pub fn memory_bytes(&self) -> usize {
         self.triangles.len() * core::mem::size_of::<[T::Vec3; 3]>()
             + self.bvh.memory_bytes()
-            + self.edges.memory_bytes()
+            + self.edges.as_ref().map_or(0, ObjectEdges::memory_bytes)
+            + self.edges_f64.as_ref().map_or(0, ObjectEdges::memory_bytes)
     }
 }
 
@@ -267,24 +279,26 @@ impl<T: Real> ShellSurface<T> {
         Some(Self::shifted(tri, x, y))
     }
 
-    /// Nearest hit on object triangle `k` placed in tile `(x, y)`.
+    /// Nearest hit on object triangle `k` placed in tile `(x, y)`, computed in `C` with the
+    /// object's shared edges `edges` (the triangle placed in `T`, as [`Self::placed_triangle`]
+    /// gives it to an oracle, and widened exactly).
     #[inline]
     #[allow(clippy::too_many_arguments)]
-    fn intersect_object_triangle(
+    fn intersect_object_triangle<C: Real>(
         &self,
-        prism: &Prism<T>,
-        ray: &NonlinearRay<T>,
+        edges: &ObjectEdges<C>,
+        prism: &Prism<C>,
+        ray: &NonlinearRay<C>,
         k: u32,
         [x, y]: [i32; 2],
-        t_min: T,
-        t_max: T,
-    ) -> Option<Hit<T>> {
-        let tri = Self::shifted(&self.object.triangles[k as usize], x, y);
-        self.object
-            .edges
-            .intersect(k, [x, y], &tri, prism, ray, t_min, t_max, |other| {
-                self.placed_triangle(other, [x, y])
-            })
+        t_min: C,
+        t_max: C,
+    ) -> Option<Hit<C>> {
+        let tri = widened::<T, C>(&Self::shifted(&self.object.triangles[k as usize], x, y));
+        edges.intersect(k, [x, y], &tri, prism, ray, t_min, t_max, |other| {
+            self.placed_triangle(other, [x, y])
+                .map(|t| widened::<T, C>(&t))
+        })
     }
 
     /// The object's BVH in tile `(x, y)` along `curve` (set up once per prism), nearest
@@ -293,16 +307,17 @@ impl<T: Real> ShellSurface<T> {
     /// cheap interval rejection sees only the short stretch of curve that matters); updates
     /// `best`.
     #[allow(clippy::too_many_arguments)]
-    fn intersect_tile(
+    fn intersect_tile<C: Real>(
         &self,
+        edges: &ObjectEdges<C>,
         tri: usize,
-        prism: &Prism<T>,
-        curve: &TextureCurve<'_, T>,
+        prism: &Prism<C>,
+        curve: &TextureCurve<'_, C>,
         (x, y): (i32, i32),
-        [h_in, h_out]: [T; 2],
-        t_min: T,
-        t_max: &mut T,
-        best: &mut Option<ShellHit<T>>,
+        [h_in, h_out]: [C; 2],
+        t_min: C,
+        t_max: &mut C,
+        best: &mut Option<ShellHit<C>>,
         stats: &mut TraversalStats,
     ) {
         let nodes = self.object.bvh.nodes();
@@ -319,14 +334,14 @@ impl<T: Real> ShellSurface<T> {
         // test's rejection is (`TextureCurve::uv_enclosure`); a node whose enclosure does not
         // exist (the denominator may vanish) hands down its parent's.
         let tile_enclosure = curve.uv_enclosure(h_in, h_out);
-        let mut stack = SpillStack::<_, OBJECT_STACK>::new((0u32, T::ZERO, None));
+        let mut stack = SpillStack::<_, OBJECT_STACK>::new((0u32, C::ZERO, None));
         stack.push((0, t_min, tile_enclosure));
         while let Some((node, entry, node_enclosure)) = stack.pop() {
             if entry > *t_max {
                 continue;
             }
             let node = &nodes[node as usize];
-            let mut found: [(T, usize, Option<[T; 4]>); 4] = [(T::ZERO, 0, None); 4];
+            let mut found: [(C, usize, Option<[C; 4]>); 4] = [(C::ZERO, 0, None); 4];
             let mut n = 0;
             for c in 0..4 {
                 if !Bvh4::is_used(node, c) {
@@ -334,8 +349,11 @@ impl<T: Real> ShellSurface<T> {
                 }
                 let b = &node.bounds[c];
                 stats.box_tests += 1;
-                let lo = [b.lo[0] + dx, b.lo[1] + dy, b.lo[2].max(h_in)];
-                let hi = [b.hi[0] + dx, b.hi[1] + dy, b.hi[2].min(h_out)];
+                // Shifted in `T`, as the triangles are placed, so each box holds its
+                // triangles' placed vertices (rounding is monotonic), then widened.
+                let w = |v: T| C::from_f64(v.to_f64());
+                let lo = [w(b.lo[0] + dx), w(b.lo[1] + dy), w(b.lo[2]).max(h_in)];
+                let hi = [w(b.hi[0] + dx), w(b.hi[1] + dy), w(b.hi[2]).min(h_out)];
                 if let Some([u_lo, u_hi, v_lo, v_hi]) = node_enclosure
                     && (u_hi < lo[0] || u_lo > hi[0] || v_hi < lo[1] || v_lo > hi[1])
                 {
@@ -360,9 +378,15 @@ impl<T: Real> ShellSurface<T> {
                     let first = node.index[c] as usize;
                     for &k in &order[first..first + node.count[c] as usize] {
                         stats.texel_tests += 1;
-                        if let Some(hit) =
-                            self.intersect_object_triangle(prism, ray, k, [x, y], t_min, *t_max)
-                        {
+                        if let Some(hit) = self.intersect_object_triangle(
+                            edges,
+                            prism,
+                            ray,
+                            k,
+                            [x, y],
+                            t_min,
+                            *t_max,
+                        ) {
                             *t_max = hit.t;
                             *best = Some(ShellHit {
                                 hit,
@@ -383,6 +407,15 @@ impl<T: Real> ShellSurface<T> {
     }
 
     /// The nearest hit in base triangle `tri` through the implicit quadtree over tiles.
+    ///
+    /// A surface in a type narrower than `f64` traces every prism in `f64` from its own data
+    /// (prism and ray widened exactly, [`nlrt_shellmap::in_f64`]; object triangles and boxes
+    /// placed in their tile in `T`, as [`ShellSurface::placed_triangle`] gives them, and
+    /// widened), the hit rounded back (counted in [`TraversalStats::f64_prisms`]): in `f32`
+    /// the object test's rounding exceeded the bounds of its windows on thin, steep triangles
+    /// (the feathers' barbs: 9 of 64,817 aimed rays leaked, at Eq. 6's conditions from 1 to
+    /// 184 and in tiles from 1 to 122, so no cheaper rule picks the prisms), and the walk's
+    /// tile and box tests must decide in the same arithmetic as the object test.
     pub fn intersect_blas(
         &self,
         tri: usize,
@@ -392,39 +425,11 @@ impl<T: Real> ShellSurface<T> {
         t_max: T,
         stats: &mut TraversalStats,
     ) -> Option<ShellHit<T>> {
-        let [h_lo, h_hi] = self.object.h_range;
-        let mut best = None;
-        let curve = TextureCurve::new(prism, ray);
-        walk_cells::<T, CURVE_STACK>(
-            self.prisms.roots(tri),
-            prism,
-            &curve,
-            &BaseEdges::new(ray),
-            CellSize::new(T::ONE),
-            t_min,
-            t_max,
-            stats,
-            |_, _, _| [h_lo, h_hi],
-            |x, y, h, t_max, stats| {
-                let mut t = t_max;
-                self.intersect_tile(
-                    tri,
-                    prism,
-                    &curve,
-                    (x, y),
-                    h,
-                    t_min,
-                    &mut t,
-                    &mut best,
-                    stats,
-                );
-                (t < t_max).then_some(t)
-            },
-        );
-        best
+        self.search(Search::Walk, tri, prism, ray, t_min, t_max, stats)
     }
 
-    /// Every object triangle in every tile of the triangle's uv box (the test reference).
+    /// Every object triangle in every tile of the triangle's uv box (the test reference), in
+    /// the arithmetic of [`ShellSurface::intersect_blas`].
     pub fn intersect_blas_brute_force(
         &self,
         tri: usize,
@@ -433,22 +438,106 @@ impl<T: Real> ShellSurface<T> {
         t_min: T,
         t_max: T,
     ) -> Option<ShellHit<T>> {
-        let [x0, y0, x1, y1] = self.prisms.roots(tri).texels;
+        let mut stats = TraversalStats::default();
+        self.search(Search::EveryTile, tri, prism, ray, t_min, t_max, &mut stats)
+    }
+
+    /// `search` over triangle `tri`, in `f64` where `T` is narrower (see
+    /// [`ShellSurface::intersect_blas`]).
+    #[allow(clippy::too_many_arguments)]
+    fn search(
+        &self,
+        search: Search,
+        tri: usize,
+        prism: &Prism<T>,
+        ray: &NonlinearRay<T>,
+        t_min: T,
+        t_max: T,
+        stats: &mut TraversalStats,
+    ) -> Option<ShellHit<T>> {
+        match (&self.object.edges, &self.object.edges_f64) {
+            (Some(edges), _) => self.search_in(search, edges, tri, prism, ray, t_min, t_max, stats),
+            (None, Some(edges)) => {
+                stats.f64_prisms += 1;
+                let (prism, ray) = nlrt_shellmap::in_f64(prism, &ray.ray);
+                let (t_min, t_max) = (t_min.to_f64(), t_max.to_f64());
+                self.search_in(search, edges, tri, &prism, &ray, t_min, t_max, stats)
+                    .map(ShellHit::narrowed)
+            }
+            (None, None) => None,
+        }
+    }
+
+    /// `search` over triangle `tri` in `C`.
+    #[allow(clippy::too_many_arguments)]
+    fn search_in<C: Real>(
+        &self,
+        search: Search,
+        edges: &ObjectEdges<C>,
+        tri: usize,
+        prism: &Prism<C>,
+        ray: &NonlinearRay<C>,
+        t_min: C,
+        t_max: C,
+        stats: &mut TraversalStats,
+    ) -> Option<ShellHit<C>> {
         let mut best = None;
-        let mut t_max = t_max;
-        for y in y0..=y1 {
-            for x in x0..=x1 {
-                for k in 0..self.object.triangles.len() as u32 {
-                    if let Some(hit) =
-                        self.intersect_object_triangle(prism, ray, k, [x, y], t_min, t_max)
-                    {
-                        t_max = hit.t;
-                        best = Some(ShellHit {
-                            hit,
-                            triangle: tri as u32,
-                            tile: [x, y],
-                            object_triangle: k,
-                        });
+        match search {
+            Search::Walk => {
+                let [h_lo, h_hi] = self.object.h_range.map(|h| C::from_f64(h.to_f64()));
+                let curve = TextureCurve::new(prism, ray);
+                walk_cells::<C, CURVE_STACK>(
+                    self.prisms.roots(tri),
+                    prism,
+                    &curve,
+                    &BaseEdges::new(ray),
+                    CellSize::new(C::ONE),
+                    t_min,
+                    t_max,
+                    stats,
+                    |_, _, _| [h_lo, h_hi],
+                    |x, y, h, t_max, stats| {
+                        let mut t = t_max;
+                        self.intersect_tile(
+                            edges,
+                            tri,
+                            prism,
+                            &curve,
+                            (x, y),
+                            h,
+                            t_min,
+                            &mut t,
+                            &mut best,
+                            stats,
+                        );
+                        (t < t_max).then_some(t)
+                    },
+                );
+            }
+            Search::EveryTile => {
+                let [x0, y0, x1, y1] = self.prisms.roots(tri).texels;
+                let mut t_max = t_max;
+                for y in y0..=y1 {
+                    for x in x0..=x1 {
+                        for k in 0..self.object.triangles.len() as u32 {
+                            if let Some(hit) = self.intersect_object_triangle(
+                                edges,
+                                prism,
+                                ray,
+                                k,
+                                [x, y],
+                                t_min,
+                                t_max,
+                            ) {
+                                t_max = hit.t;
+                                best = Some(ShellHit {
+                                    hit,
+                                    triangle: tri as u32,
+                                    tile: [x, y],
+                                    object_triangle: k,
+                                });
+                            }
+                        }
                     }
                 }
             }
@@ -464,6 +553,24 @@ impl<T: Real> ShellSurface<T> {
         t_max: T,
         stats: &mut TraversalStats,
     ) -> Option<ShellHit<T>> {
+        if let Some(edges) = &self.object.edges_f64 {
+            // Traced in `f64` (see `intersect_blas`): each prism's nonlinear ray is set up in
+            // `f64` directly, with the ray's part once, not first in `T`.
+            let wide = WideRay::new(ray);
+            let t_min_f64 = t_min.to_f64();
+            return self
+                .prisms
+                .traverse(ray, t_min, t_max, |tri, prism, t_max| {
+                    stats.prism_tests += 1;
+                    stats.f64_prisms += 1;
+                    let (prism, nl) = wide.in_prism(prism);
+                    let (search, t_max) = (Search::Walk, t_max.to_f64());
+                    let hit =
+                        self.search_in(search, edges, tri, &prism, &nl, t_min_f64, t_max, stats)?;
+                    let hit = hit.narrowed::<T>();
+                    Some((hit, hit.hit.t))
+                });
+        }
         self.prisms
             .intersect(ray, t_min, t_max, stats, |tri, prism, nl, t_max, stats| {
                 let hit = self.intersect_blas(tri, prism, nl, t_min, t_max, stats)?;
@@ -499,4 +606,36 @@ impl<T: Real> ShellSurface<T> {
         );
         facing_unit::<T>(n, dir)
     }
+}
+
+impl ShellHit<f64> {
+    /// The hit of an `f64` trace, its values rounded to `T`.
+    fn narrowed<T: Real>(self) -> ShellHit<T> {
+        ShellHit {
+            hit: self.hit.narrowed(),
+            triangle: self.triangle,
+            tile: self.tile,
+            object_triangle: self.object_triangle,
+        }
+    }
+}
+
+/// Which search [`ShellSurface::search`] runs.
+#[derive(Clone, Copy, Debug)]
+enum Search {
+    /// The quadtree walk and the object's BVH ([`ShellSurface::intersect_blas`]).
+    Walk,
+    /// Every object triangle in every tile of the triangle's uv box (the test reference).
+    EveryTile,
+}
+
+/// Whether a shell surface in `T` traces its prisms in `f64` (`T` is narrower).
+fn traced_in_f64<T: Real>() -> bool {
+    T::MANTISSA_DIGITS < f64::MANTISSA_DIGITS
+}
+
+/// A triangle of `T` in `C`, each coordinate widened (exactly, where `C` is as wide).
+fn widened<T: Real, C: Real>(tri: &[T::Vec3; 3]) -> [C::Vec3; 3] {
+    let w = |v: T| C::from_f64(v.to_f64());
+    tri.map(|p| C::Vec3::new(w(p.x()), w(p.y()), w(p.z())))
 }

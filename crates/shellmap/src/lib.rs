@@ -45,7 +45,7 @@ pub use microtriangle::{
 pub use prism::{Canonical, Prism, onto_base_triangle};
 pub use prism_hit::{PrismSpan, intersect_prism};
 pub use ray::{
-    BaseEdges, NonlinearRay, Ray, decidedly_outside_in_f64, in_f64, max_world_coordinate,
+    BaseEdges, NonlinearRay, Ray, WideRay, decidedly_outside_in_f64, in_f64, max_world_coordinate,
     root_decidedly_outside_in_f64,
 };
 

@@ -95,6 +95,24 @@ impl<T: Real> Hit<T> {
     }
 }
 
+impl Hit<f64> {
+    /// The hit of an `f64` trace, each value rounded to `T` (a distance in `[t_min, t_max]`
+    /// of `T` stays there: rounding is monotonic and the ends are values of `T`).
+    #[must_use]
+    #[inline]
+    pub fn narrowed<T: Real>(self) -> Hit<T> {
+        let n = T::from_f64;
+        Hit {
+            t: n(self.t),
+            alpha: n(self.alpha),
+            beta: n(self.beta),
+            h: n(self.h),
+            u: n(self.u),
+            v: n(self.v),
+        }
+    }
+}
+
 /// `(alpha, beta)` at height `h` from the two of Eq. 11's three linear equations whose 2x2
 /// determinant is largest in magnitude: the two rows of Eq. 6 and the plane in canonical space
 /// (Eq. 10). Eq. 6 alone fails where its determinant vanishes (e.g. `h_in = h_out`, Fig. 5).

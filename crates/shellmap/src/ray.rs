@@ -111,28 +111,52 @@ pub fn root_decidedly_outside_in_f64<T: Real>(
 /// its cross products with the two coordinate axes other than its largest component's
 /// (independent, and exact in `f64` for an `f32` direction: each component a product of two
 /// of its components, or 0), unlike a rounded orthonormal basis. For `f32` inputs this is
-/// the curve of the very same ray and prism, with about 29 more bits.
+/// the curve of the very same ray and prism, with about 29 more bits. A ray traced through
+/// many prisms this way sets up its part once ([`WideRay`]).
 #[must_use]
 pub fn in_f64<T: Real>(prism: &Prism<T>, ray: &Ray<T>) -> (Prism<f64>, NonlinearRay<f64>) {
-    use nlrt_poly::glam::DVec3;
-    let prism = Prism::<f64>::new(
-        prism.p.map(Vector3::to_dvec3),
-        prism.n.map(Vector3::to_dvec3),
-        prism.uv.map(Vector2::to_dvec2),
-    );
-    let dir = ray.dir.to_dvec3();
-    let largest = Vector3::max_abs_axis(dir);
-    let axes = [DVec3::X, DVec3::Y, DVec3::Z];
-    let frame = [
-        dir.cross(axes[(largest + 1) % 3]),
-        dir.cross(axes[(largest + 2) % 3]),
-    ];
-    let ray = Ray::<f64> {
-        origin: ray.origin.to_dvec3(),
-        dir,
-    };
-    let curve = NonlinearRay::with_perpendiculars(&prism, &ray, frame);
-    (prism, curve)
+    WideRay::new(ray).in_prism(prism)
+}
+
+/// A ray in `f64` (its values converted exactly) with the exact frame of [`in_f64`], set up
+/// once for the prisms it is traced through.
+#[derive(Clone, Copy, Debug)]
+pub struct WideRay {
+    ray: Ray<f64>,
+    frame: [nlrt_poly::glam::DVec3; 2],
+}
+
+impl WideRay {
+    /// `ray` widened, and its frame.
+    #[must_use]
+    pub fn new<T: Real>(ray: &Ray<T>) -> Self {
+        use nlrt_poly::glam::DVec3;
+        let dir = ray.dir.to_dvec3();
+        let largest = Vector3::max_abs_axis(dir);
+        let axes = [DVec3::X, DVec3::Y, DVec3::Z];
+        Self {
+            ray: Ray::<f64> {
+                origin: ray.origin.to_dvec3(),
+                dir,
+            },
+            frame: [
+                dir.cross(axes[(largest + 1) % 3]),
+                dir.cross(axes[(largest + 2) % 3]),
+            ],
+        }
+    }
+
+    /// `prism` widened and the nonlinear ray in it, as [`in_f64`] gives them.
+    #[must_use]
+    pub fn in_prism<T: Real>(&self, prism: &Prism<T>) -> (Prism<f64>, NonlinearRay<f64>) {
+        let prism = Prism::<f64>::new(
+            prism.p.map(Vector3::to_dvec3),
+            prism.n.map(Vector3::to_dvec3),
+            prism.uv.map(Vector2::to_dvec2),
+        );
+        let curve = NonlinearRay::with_perpendiculars(&prism, &self.ray, self.frame);
+        (prism, curve)
+    }
 }
 
 /// A linear function `c0 + c1 h`.
