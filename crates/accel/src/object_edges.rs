@@ -239,12 +239,17 @@ impl<T: Real> ObjectEdges<T> {
             + self.of_triangle.len() * core::mem::size_of::<[u32; 3]>()
             + self.reversed.len()
     }
+}
 
+/// The search, in `T`, over edges whose separating planes are stored in `S` (`f32` edges of
+/// an `f32` surface traced in `f64`: each plane is widened exactly where it is used, so the
+/// two triangles of an edge still see the same plane).
+impl<S: Real> ObjectEdges<S> {
     /// The nearest hit with `t` in `[t_min, t_max]` of `ray` (in `prism`) on object triangle
     /// `k`, placed in `tile` as `tri` (`placed` gives any triangle of the object in the same
     /// tile: the neighbours' planes), watertight across its shared edges (see the module).
     #[allow(clippy::too_many_arguments)]
-    pub(crate) fn intersect(
+    pub(crate) fn intersect<T: Real>(
         &self,
         k: u32,
         tile: [i32; 2],
@@ -383,7 +388,7 @@ impl<T: Real> ObjectEdges<T> {
     #[allow(clippy::too_many_arguments)]
     #[cold]
     #[inline(never)]
-    fn piece_search(
+    fn piece_search<T: Real>(
         &self,
         k: u32,
         tile: [i32; 2],
@@ -418,7 +423,17 @@ impl<T: Real> ObjectEdges<T> {
             } else {
                 neighbour.map(|c| -c)
             };
-            let separating = shifted_plane(&edge.plane, tile);
+            let stored = &edge.plane;
+            let widen = |c: S| T::from_f64(c.to_f64());
+            let plane = TexturePlane::<T> {
+                normal: T::Vec3::new(
+                    widen(stored.normal.x()),
+                    widen(stored.normal.y()),
+                    widen(stored.normal.z()),
+                ),
+                k: widen(stored.k),
+            };
+            let separating = shifted_plane(&plane, tile);
             Some(Side::new(
                 separating,
                 [tri[e], tri[(e + 1) % 3]],

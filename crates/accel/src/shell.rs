@@ -6,7 +6,6 @@
 
 use alloc::vec::Vec;
 use core::fmt;
-use nlrt_poly::glam::DVec3;
 use nlrt_poly::{Real, Vector3};
 use nlrt_shellmap::{
     BaseEdges, Hit, NonlinearRay, Prism, Ray, TextureCurve, TexturePlane, WideRay, facing_unit,
@@ -77,11 +76,8 @@ pub struct ShellObject<T: Real> {
     triangles: Vec<[T::Vec3; 3]>,
     bvh: Bvh4<T>,
     h_range: [T; 2],
-    /// The edges two triangles share, made watertight, for a trace in `T` (`T` is `f64`)...
-    edges: Option<ObjectEdges<T>>,
-    /// ... or, from the triangles widened exactly, for the trace in `f64` of a narrower `T`
-    /// (see [`ShellSurface::intersect_blas`]).
-    edges_f64: Option<ObjectEdges<f64>>,
+    /// The edges two triangles share, made watertight.
+    edges: ObjectEdges<T>,
     /// Triangles dropped because their three points are collinear (no plane).
     pub dropped_degenerate: usize,
 }
@@ -119,18 +115,12 @@ impl<T: Real> ShellObject<T> {
             .collect();
         let bvh = Bvh4::build(&boxes, 4);
         let b = bvh.bounds();
-        let (edges, edges_f64) = if traced_in_f64::<T>() {
-            let wide: Vec<[DVec3; 3]> = kept.iter().map(|t| t.map(Vector3::to_dvec3)).collect();
-            (None, Some(ObjectEdges::new(&wide)))
-        } else {
-            (Some(ObjectEdges::new(&kept)), None)
-        };
+        let edges = ObjectEdges::new(&kept);
         Ok(Self {
             triangles: kept,
             bvh,
             h_range: [b.lo[2], b.hi[2]],
             edges,
-            edges_f64,
             dropped_degenerate: dropped,
         })
     }
@@ -146,8 +136,7 @@ impl<T: Real> ShellObject<T> {
     pub fn memory_bytes(&self) -> usize {
         self.triangles.len() * core::mem::size_of::<[T::Vec3; 3]>()
             + self.bvh.memory_bytes()
-            + self.edges.as_ref().map_or(0, ObjectEdges::memory_bytes)
-            + self.edges_f64.as_ref().map_or(0, ObjectEdges::memory_bytes)
+            + self.edges.memory_bytes()
     }
 }
 
@@ -279,14 +268,13 @@ impl<T: Real> ShellSurface<T> {
         Some(Self::shifted(tri, x, y))
     }
 
-    /// Nearest hit on object triangle `k` placed in tile `(x, y)`, computed in `C` with the
-    /// object's shared edges `edges` (the triangle placed in `T`, as [`Self::placed_triangle`]
-    /// gives it to an oracle, and widened exactly).
+    /// Nearest hit on object triangle `k` placed in tile `(x, y)`, computed in `C` (the
+    /// triangle placed in `T`, as [`Self::placed_triangle`] gives it to an oracle, and
+    /// widened exactly).
     #[inline]
     #[allow(clippy::too_many_arguments)]
     fn intersect_object_triangle<C: Real>(
         &self,
-        edges: &ObjectEdges<C>,
         prism: &Prism<C>,
         ray: &NonlinearRay<C>,
         k: u32,
@@ -295,10 +283,12 @@ impl<T: Real> ShellSurface<T> {
         t_max: C,
     ) -> Option<Hit<C>> {
         let tri = widened::<T, C>(&Self::shifted(&self.object.triangles[k as usize], x, y));
-        edges.intersect(k, [x, y], &tri, prism, ray, t_min, t_max, |other| {
-            self.placed_triangle(other, [x, y])
-                .map(|t| widened::<T, C>(&t))
-        })
+        self.object
+            .edges
+            .intersect(k, [x, y], &tri, prism, ray, t_min, t_max, |other| {
+                self.placed_triangle(other, [x, y])
+                    .map(|t| widened::<T, C>(&t))
+            })
     }
 
     /// The object's BVH in tile `(x, y)` along `curve` (set up once per prism), nearest
@@ -309,7 +299,6 @@ impl<T: Real> ShellSurface<T> {
     #[allow(clippy::too_many_arguments)]
     fn intersect_tile<C: Real>(
         &self,
-        edges: &ObjectEdges<C>,
         tri: usize,
         prism: &Prism<C>,
         curve: &TextureCurve<'_, C>,
@@ -378,15 +367,9 @@ impl<T: Real> ShellSurface<T> {
                     let first = node.index[c] as usize;
                     for &k in &order[first..first + node.count[c] as usize] {
                         stats.texel_tests += 1;
-                        if let Some(hit) = self.intersect_object_triangle(
-                            edges,
-                            prism,
-                            ray,
-                            k,
-                            [x, y],
-                            t_min,
-                            *t_max,
-                        ) {
+                        if let Some(hit) =
+                            self.intersect_object_triangle(prism, ray, k, [x, y], t_min, *t_max)
+                        {
                             *t_max = hit.t;
                             *best = Some(ShellHit {
                                 hit,
@@ -455,17 +438,15 @@ impl<T: Real> ShellSurface<T> {
         t_max: T,
         stats: &mut TraversalStats,
     ) -> Option<ShellHit<T>> {
-        match (&self.object.edges, &self.object.edges_f64) {
-            (Some(edges), _) => self.search_in(search, edges, tri, prism, ray, t_min, t_max, stats),
-            (None, Some(edges)) => {
-                stats.f64_prisms += 1;
-                let (prism, ray) = nlrt_shellmap::in_f64(prism, &ray.ray);
-                let (t_min, t_max) = (t_min.to_f64(), t_max.to_f64());
-                self.search_in(search, edges, tri, &prism, &ray, t_min, t_max, stats)
-                    .map(ShellHit::narrowed)
-            }
-            (None, None) => None,
+        if traced_in_f64::<T>() {
+            stats.f64_prisms += 1;
+            let (prism, ray) = nlrt_shellmap::in_f64(prism, &ray.ray);
+            let (t_min, t_max) = (t_min.to_f64(), t_max.to_f64());
+            return self
+                .search_in(search, tri, &prism, &ray, t_min, t_max, stats)
+                .map(ShellHit::narrowed);
         }
+        self.search_in(search, tri, prism, ray, t_min, t_max, stats)
     }
 
     /// `search` over triangle `tri` in `C`.
@@ -473,7 +454,6 @@ impl<T: Real> ShellSurface<T> {
     fn search_in<C: Real>(
         &self,
         search: Search,
-        edges: &ObjectEdges<C>,
         tri: usize,
         prism: &Prism<C>,
         ray: &NonlinearRay<C>,
@@ -499,7 +479,6 @@ impl<T: Real> ShellSurface<T> {
                     |x, y, h, t_max, stats| {
                         let mut t = t_max;
                         self.intersect_tile(
-                            edges,
                             tri,
                             prism,
                             &curve,
@@ -520,15 +499,9 @@ impl<T: Real> ShellSurface<T> {
                 for y in y0..=y1 {
                     for x in x0..=x1 {
                         for k in 0..self.object.triangles.len() as u32 {
-                            if let Some(hit) = self.intersect_object_triangle(
-                                edges,
-                                prism,
-                                ray,
-                                k,
-                                [x, y],
-                                t_min,
-                                t_max,
-                            ) {
+                            if let Some(hit) =
+                                self.intersect_object_triangle(prism, ray, k, [x, y], t_min, t_max)
+                            {
                                 t_max = hit.t;
                                 best = Some(ShellHit {
                                     hit,
@@ -553,7 +526,7 @@ impl<T: Real> ShellSurface<T> {
         t_max: T,
         stats: &mut TraversalStats,
     ) -> Option<ShellHit<T>> {
-        if let Some(edges) = &self.object.edges_f64 {
+        if traced_in_f64::<T>() {
             // Traced in `f64` (see `intersect_blas`): each prism's nonlinear ray is set up in
             // `f64` directly, with the ray's part once, not first in `T`.
             let wide = WideRay::new(ray);
@@ -565,8 +538,7 @@ impl<T: Real> ShellSurface<T> {
                     stats.f64_prisms += 1;
                     let (prism, nl) = wide.in_prism(prism);
                     let (search, t_max) = (Search::Walk, t_max.to_f64());
-                    let hit =
-                        self.search_in(search, edges, tri, &prism, &nl, t_min_f64, t_max, stats)?;
+                    let hit = self.search_in(search, tri, &prism, &nl, t_min_f64, t_max, stats)?;
                     let hit = hit.narrowed::<T>();
                     Some((hit, hit.hit.t))
                 });
