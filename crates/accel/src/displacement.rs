@@ -16,6 +16,7 @@ use crate::cells::{CURVE_STACK, CellSize, walk_cells};
 use crate::heightfield::{HEIGHT_ONE, HeightField};
 use crate::mesh::{BaseMesh, MeshError};
 use crate::pose::{PoseUpdate, TlasUpdate};
+use crate::precision::{PrismSearch, Search};
 use crate::seam::{EDGE_VERTICES, NO_SEAM, SeamRule, Seams, edge_parameter};
 use crate::stats::TraversalStats;
 use crate::tlas::{MAX_TEXEL_COORDINATE, PrismTlas, RootNodes, SetupError};
@@ -699,48 +700,16 @@ impl<T: Real> DisplacedSurface<T> {
         t_max: T,
         stats: &mut TraversalStats,
     ) -> Option<SurfaceHit<T>> {
-        self.search(Search::Walk, tri, prism, ray, t_min, t_max, stats)
-    }
-
-    /// `search` over triangle `tri` in `T`, or in `f64` where [`traced_in_f64`] says so.
-    #[allow(clippy::too_many_arguments)]
-    fn search(
-        &self,
-        search: Search,
-        tri: usize,
-        prism: &Prism<T>,
-        ray: &NonlinearRay<T>,
-        t_min: T,
-        t_max: T,
-        stats: &mut TraversalStats,
-    ) -> Option<SurfaceHit<T>> {
-        if traced_in_f64(ray) {
-            stats.f64_prisms += 1;
-            let (prism, ray) = nlrt_shellmap::in_f64(prism, &ray.ray);
-            let (t_min, t_max) = (t_min.to_f64(), t_max.to_f64());
-            return self
-                .search_in(search, tri, &prism, &ray, t_min, t_max, stats)
-                .map(SurfaceHit::narrowed);
-        }
-        self.search_in(search, tri, prism, ray, t_min, t_max, stats)
-    }
-
-    /// `search` over triangle `tri` computed in `C`.
-    #[allow(clippy::too_many_arguments)]
-    fn search_in<C: Real>(
-        &self,
-        search: Search,
-        tri: usize,
-        prism: &Prism<C>,
-        ray: &NonlinearRay<C>,
-        t_min: C,
-        t_max: C,
-        stats: &mut TraversalStats,
-    ) -> Option<SurfaceHit<C>> {
-        match search {
-            Search::Walk => self.walk_blas::<C, CURVE_STACK>(tri, prism, ray, t_min, t_max, stats),
-            Search::EveryTexel => self.brute_force_in(tri, prism, ray, t_min, t_max),
-        }
+        self.search(
+            traced_in_f64(ray),
+            Search::Walk,
+            tri,
+            prism,
+            ray,
+            t_min,
+            t_max,
+            stats,
+        )
     }
 
     /// [`DisplacedSurface::intersect_blas`] computed in `C` (`T`, or `f64` for an
@@ -804,7 +773,8 @@ impl<T: Real> DisplacedSurface<T> {
     ) -> Option<SurfaceHit<T>> {
         let mut stats = TraversalStats::default();
         self.search(
-            Search::EveryTexel,
+            traced_in_f64(ray),
+            Search::EveryCell,
             tri,
             prism,
             ray,
@@ -1154,15 +1124,6 @@ fn diagonal_beyond<C: Real>(splits: &[(C, u8)], at: C, r: C, window: C) -> bool 
     })
 }
 
-/// How a base triangle's texels are searched.
-#[derive(Clone, Copy)]
-enum Search {
-    /// The BLAS walk ([`DisplacedSurface::intersect_blas`]).
-    Walk,
-    /// Every texel of the triangle's uv box (the test reference).
-    EveryTexel,
-}
-
 /// Condition number of Eq. 6 ([`NonlinearRay::condition`]) beyond which a prism of an `f32`
 /// surface is traced in `f64`: there the `f32` curve's coefficients may err by `2^6` units of
 /// roundoff (`2^-18` relative), which moves a hit of a ray nearly parallel to the prism's
@@ -1193,15 +1154,31 @@ fn traced_in_f64<T: Real>(ray: &NonlinearRay<T>) -> bool {
             })
 }
 
-impl SurfaceHit<f64> {
-    /// The hit of an `f64` walk, each value rounded to `T` (a distance in `[t_min, t_max]` of
-    /// `T` stays there).
-    fn narrowed<T: Real>(self) -> SurfaceHit<T> {
+impl<T: Real> PrismSearch<T> for DisplacedSurface<T> {
+    type Hit<C: Real> = SurfaceHit<C>;
+
+    fn search_in<C: Real>(
+        &self,
+        search: Search,
+        tri: usize,
+        prism: &Prism<C>,
+        ray: &NonlinearRay<C>,
+        t_min: C,
+        t_max: C,
+        stats: &mut TraversalStats,
+    ) -> Option<SurfaceHit<C>> {
+        match search {
+            Search::Walk => self.walk_blas::<C, CURVE_STACK>(tri, prism, ray, t_min, t_max, stats),
+            Search::EveryCell => self.brute_force_in(tri, prism, ray, t_min, t_max),
+        }
+    }
+
+    fn narrowed(hit: SurfaceHit<f64>) -> SurfaceHit<T> {
         SurfaceHit {
-            hit: self.hit.narrowed(),
-            triangle: self.triangle,
-            texel: self.texel,
-            part: self.part,
+            hit: hit.hit.narrowed(),
+            triangle: hit.triangle,
+            texel: hit.texel,
+            part: hit.part,
         }
     }
 }

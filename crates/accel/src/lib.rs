@@ -48,6 +48,7 @@ mod heightfield;
 mod mesh;
 mod object_edges;
 mod pose;
+mod precision;
 mod seam;
 mod shell;
 mod stack;

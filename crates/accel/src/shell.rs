@@ -17,6 +17,7 @@ use crate::cells::{CURVE_STACK, CellSize, walk_cells};
 use crate::mesh::{BaseMesh, MeshError};
 use crate::object_edges::ObjectEdges;
 use crate::pose::{PoseUpdate, TlasUpdate};
+use crate::precision::{PrismSearch, Search};
 use crate::stack::SpillStack;
 use crate::stats::TraversalStats;
 use crate::tlas::{MAX_TEXEL_COORDINATE, PrismTlas, RootNodes, SetupError};
@@ -408,7 +409,16 @@ impl<T: Real> ShellSurface<T> {
         t_max: T,
         stats: &mut TraversalStats,
     ) -> Option<ShellHit<T>> {
-        self.search(Search::Walk, tri, prism, ray, t_min, t_max, stats)
+        self.search(
+            traced_in_f64::<T>(),
+            Search::Walk,
+            tri,
+            prism,
+            ray,
+            t_min,
+            t_max,
+            stats,
+        )
     }
 
     /// Every object triangle in every tile of the triangle's uv box (the test reference), in
@@ -422,35 +432,84 @@ impl<T: Real> ShellSurface<T> {
         t_max: T,
     ) -> Option<ShellHit<T>> {
         let mut stats = TraversalStats::default();
-        self.search(Search::EveryTile, tri, prism, ray, t_min, t_max, &mut stats)
+        let in_f64 = traced_in_f64::<T>();
+        self.search(
+            in_f64,
+            Search::EveryCell,
+            tri,
+            prism,
+            ray,
+            t_min,
+            t_max,
+            &mut stats,
+        )
     }
 
-    /// `search` over triangle `tri`, in `f64` where `T` is narrower (see
-    /// [`ShellSurface::intersect_blas`]).
-    #[allow(clippy::too_many_arguments)]
-    fn search(
+    /// The nearest hit: TLAS, the quadtree walked along the ray's curve, object BVH.
+    pub fn intersect(
         &self,
-        search: Search,
-        tri: usize,
-        prism: &Prism<T>,
-        ray: &NonlinearRay<T>,
+        ray: &Ray<T>,
         t_min: T,
         t_max: T,
         stats: &mut TraversalStats,
     ) -> Option<ShellHit<T>> {
         if traced_in_f64::<T>() {
-            stats.f64_prisms += 1;
-            let (prism, ray) = nlrt_shellmap::in_f64(prism, &ray.ray);
-            let (t_min, t_max) = (t_min.to_f64(), t_max.to_f64());
+            // Traced in `f64` (see `intersect_blas`): each prism's nonlinear ray is set up in
+            // `f64` directly, with the ray's part once, not first in `T`.
+            let wide = WideRay::new(ray);
+            let t_min_f64 = t_min.to_f64();
             return self
-                .search_in(search, tri, &prism, &ray, t_min, t_max, stats)
-                .map(ShellHit::narrowed);
+                .prisms
+                .traverse(ray, t_min, t_max, |tri, prism, t_max| {
+                    stats.prism_tests += 1;
+                    stats.f64_prisms += 1;
+                    let (prism, nl) = wide.in_prism(prism);
+                    let (search, t_max) = (Search::Walk, t_max.to_f64());
+                    let hit = self.search_in(search, tri, &prism, &nl, t_min_f64, t_max, stats)?;
+                    let hit = Self::narrowed(hit);
+                    Some((hit, hit.hit.t))
+                });
         }
-        self.search_in(search, tri, prism, ray, t_min, t_max, stats)
+        self.prisms
+            .intersect(ray, t_min, t_max, stats, |tri, prism, nl, t_max, stats| {
+                let hit = self.intersect_blas(tri, prism, nl, t_min, t_max, stats)?;
+                Some((hit, hit.hit.t))
+            })
     }
 
-    /// `search` over triangle `tri` in `C`.
-    #[allow(clippy::too_many_arguments)]
+    /// The nearest hit by brute force over every base triangle, tile and object triangle.
+    pub fn intersect_brute_force(&self, ray: &Ray<T>, t_min: T, t_max: T) -> Option<ShellHit<T>> {
+        self.prisms
+            .intersect_brute_force(ray, t_max, |tri, prism, nl, t_max| {
+                let hit = self.intersect_blas_brute_force(tri, prism, nl, t_min, t_max)?;
+                Some((hit, hit.hit.t))
+            })
+    }
+
+    /// World-space unit normal at a hit (Eq. 13), facing against `dir`.
+    #[must_use]
+    pub fn normal(&self, hit: &ShellHit<T>, dir: T::Vec3) -> Option<T::Vec3> {
+        let prism = self.prism(hit.triangle as usize);
+        let tri = Self::shifted(
+            &self.object.triangles[hit.object_triangle as usize],
+            hit.tile[0],
+            hit.tile[1],
+        );
+        let plane = TexturePlane::through(&tri)?;
+        let n = world_normal(
+            &prism,
+            &plane.canonical(&prism),
+            hit.hit.alpha,
+            hit.hit.beta,
+            hit.hit.h,
+        );
+        facing_unit::<T>(n, dir)
+    }
+}
+
+impl<T: Real> PrismSearch<T> for ShellSurface<T> {
+    type Hit<C: Real> = ShellHit<C>;
+
     fn search_in<C: Real>(
         &self,
         search: Search,
@@ -493,7 +552,7 @@ impl<T: Real> ShellSurface<T> {
                     },
                 );
             }
-            Search::EveryTile => {
+            Search::EveryCell => {
                 let [x0, y0, x1, y1] = self.prisms.roots(tri).texels;
                 let mut t_max = t_max;
                 for y in y0..=y1 {
@@ -518,87 +577,14 @@ impl<T: Real> ShellSurface<T> {
         best
     }
 
-    /// The nearest hit: TLAS, the quadtree walked along the ray's curve, object BVH.
-    pub fn intersect(
-        &self,
-        ray: &Ray<T>,
-        t_min: T,
-        t_max: T,
-        stats: &mut TraversalStats,
-    ) -> Option<ShellHit<T>> {
-        if traced_in_f64::<T>() {
-            // Traced in `f64` (see `intersect_blas`): each prism's nonlinear ray is set up in
-            // `f64` directly, with the ray's part once, not first in `T`.
-            let wide = WideRay::new(ray);
-            let t_min_f64 = t_min.to_f64();
-            return self
-                .prisms
-                .traverse(ray, t_min, t_max, |tri, prism, t_max| {
-                    stats.prism_tests += 1;
-                    stats.f64_prisms += 1;
-                    let (prism, nl) = wide.in_prism(prism);
-                    let (search, t_max) = (Search::Walk, t_max.to_f64());
-                    let hit = self.search_in(search, tri, &prism, &nl, t_min_f64, t_max, stats)?;
-                    let hit = hit.narrowed::<T>();
-                    Some((hit, hit.hit.t))
-                });
-        }
-        self.prisms
-            .intersect(ray, t_min, t_max, stats, |tri, prism, nl, t_max, stats| {
-                let hit = self.intersect_blas(tri, prism, nl, t_min, t_max, stats)?;
-                Some((hit, hit.hit.t))
-            })
-    }
-
-    /// The nearest hit by brute force over every base triangle, tile and object triangle.
-    pub fn intersect_brute_force(&self, ray: &Ray<T>, t_min: T, t_max: T) -> Option<ShellHit<T>> {
-        self.prisms
-            .intersect_brute_force(ray, t_max, |tri, prism, nl, t_max| {
-                let hit = self.intersect_blas_brute_force(tri, prism, nl, t_min, t_max)?;
-                Some((hit, hit.hit.t))
-            })
-    }
-
-    /// World-space unit normal at a hit (Eq. 13), facing against `dir`.
-    #[must_use]
-    pub fn normal(&self, hit: &ShellHit<T>, dir: T::Vec3) -> Option<T::Vec3> {
-        let prism = self.prism(hit.triangle as usize);
-        let tri = Self::shifted(
-            &self.object.triangles[hit.object_triangle as usize],
-            hit.tile[0],
-            hit.tile[1],
-        );
-        let plane = TexturePlane::through(&tri)?;
-        let n = world_normal(
-            &prism,
-            &plane.canonical(&prism),
-            hit.hit.alpha,
-            hit.hit.beta,
-            hit.hit.h,
-        );
-        facing_unit::<T>(n, dir)
-    }
-}
-
-impl ShellHit<f64> {
-    /// The hit of an `f64` trace, its values rounded to `T`.
-    fn narrowed<T: Real>(self) -> ShellHit<T> {
+    fn narrowed(hit: ShellHit<f64>) -> ShellHit<T> {
         ShellHit {
-            hit: self.hit.narrowed(),
-            triangle: self.triangle,
-            tile: self.tile,
-            object_triangle: self.object_triangle,
+            hit: hit.hit.narrowed(),
+            triangle: hit.triangle,
+            tile: hit.tile,
+            object_triangle: hit.object_triangle,
         }
     }
-}
-
-/// Which search [`ShellSurface::search`] runs.
-#[derive(Clone, Copy, Debug)]
-enum Search {
-    /// The quadtree walk and the object's BVH ([`ShellSurface::intersect_blas`]).
-    Walk,
-    /// Every object triangle in every tile of the triangle's uv box (the test reference).
-    EveryTile,
 }
 
 /// Whether a shell surface in `T` traces its prisms in `f64` (`T` is narrower).
