@@ -15,7 +15,6 @@ use nlrt_accel::TraversalStats;
 use nlrt_poly::{Real, Vector3};
 use nlrt_render::integrator::{RenderOptions, render_recording};
 use nlrt_render::ray_stream::{RayKind, StreamRay};
-use nlrt_render::scenes::{Size, builtin};
 use nlrt_render::tracers::Nonlinear;
 use nlrt_shellmap::Ray;
 use std::time::Instant;
@@ -23,10 +22,10 @@ use std::time::Instant;
 /// Timed passes over each kind's rays; the median is printed.
 const ROUNDS: usize = 5;
 
-fn fail(message: &str) -> ! {
-    eprintln!("stream_counts: {message}");
-    std::process::exit(2);
-}
+mod common;
+
+/// The name in error messages.
+const PROGRAM: &str = "stream_counts";
 
 /// Traces `rays` one at a time; returns the hits and the counters.
 #[inline(never)]
@@ -61,25 +60,13 @@ fn median(mut xs: Vec<f64>) -> f64 {
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
-    let name = args.get(1).map_or("mountain", String::as_str);
-    let size = match args.get(2).map(String::as_str) {
-        None | Some("small") => Size::Small,
-        Some("paper") => Size::Paper,
-        Some(other) => fail(&format!("unknown size {other} (small or paper)")),
-    };
-    let width = match args.get(3).map(|s| s.parse::<usize>()) {
-        None => 320,
-        Some(Ok(w)) if (4..=4096).contains(&w) => w,
-        Some(_) => fail("image width: a number from 4 to 4096"),
-    };
+    let (name, scene) = common::scene_from_args(&args, PROGRAM);
+    let width = common::width_from_args(&args, 3, 320, PROGRAM);
     let only = match args.get(4).map(String::as_str) {
         None => None,
         Some("f32") => Some(0),
         Some("f64") => Some(1),
-        Some(other) => fail(&format!("unknown precision {other} (f32 or f64)")),
-    };
-    let Some(scene) = builtin(name, size) else {
-        fail(&format!("unknown scene {name}"));
+        Some(other) => common::fail(PROGRAM, &format!("unknown precision {other} (f32 or f64)")),
     };
     let opts = RenderOptions {
         width,
@@ -104,7 +91,8 @@ fn main() {
             .collect()
     };
     println!(
-        "{name} ({size:?}), stream of {} rays, one thread, medians of {ROUNDS} rounds",
+        "{name} ({}), stream of {} rays, one thread, medians of {ROUNDS} rounds",
+        args.get(2).map_or("small", String::as_str),
         stream.len()
     );
     println!(

@@ -12,14 +12,14 @@
 
 use nlrt_accel::TraversalStats;
 use nlrt_poly::{Real, Vector3};
-use nlrt_render::scenes::{Scene, Size, builtin};
+use nlrt_render::scenes::Scene;
 use nlrt_render::tracers::Nonlinear;
 use nlrt_shellmap::Ray;
 
-fn fail(message: &str) -> ! {
-    eprintln!("traversal_counts: {message}");
-    std::process::exit(2);
-}
+mod common;
+
+/// The name in error messages.
+const PROGRAM: &str = "traversal_counts";
 
 /// Hits, counters and the hits' checksum of `w x h` pixel-centre camera rays.
 #[inline(never)]
@@ -85,28 +85,16 @@ fn run<T: Real>(name: &str, scene: &Scene, w: usize) {
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
-    let name = args.get(1).map_or("mountain", String::as_str);
-    let size = match args.get(2).map(String::as_str) {
-        None | Some("small") => Size::Small,
-        Some("paper") => Size::Paper,
-        Some(other) => fail(&format!("unknown size {other} (small or paper)")),
-    };
-    let w = match args.get(4).map(|s| s.parse::<usize>()) {
-        None => 160,
-        Some(Ok(w)) if (4..=4096).contains(&w) => w,
-        Some(_) => fail("pixels per row: a number from 4 to 4096"),
-    };
-    let Some(mut scene) = builtin(name, size) else {
-        fail(&format!("unknown scene {name}"));
-    };
+    let (name, mut scene) = common::scene_from_args(&args, PROGRAM);
+    let w = common::width_from_args(&args, 4, 160, PROGRAM);
     match args.get(5).map(String::as_str) {
         None => {}
         Some("open") => scene.seam_rule = nlrt_accel::SeamRule::Open,
-        Some(other) => fail(&format!("unknown option {other} (open)")),
+        Some(other) => common::fail(PROGRAM, &format!("unknown option {other} (open)")),
     }
     match args.get(3).map(String::as_str) {
         None | Some("f32") => run::<f32>(name, &scene, w),
         Some("f64") => run::<f64>(name, &scene, w),
-        Some(other) => fail(&format!("unknown precision {other} (f32 or f64)")),
+        Some(other) => common::fail(PROGRAM, &format!("unknown precision {other} (f32 or f64)")),
     }
 }
