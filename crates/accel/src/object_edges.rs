@@ -311,7 +311,8 @@ impl<S: Real> ObjectEdges<S> {
             }
             let uv = prism.texture_uv(alpha, beta);
             let q = T::Vec3::new(uv.x(), uv.y(), h);
-            let bound = point_error_bound(&cubic, ray, q, h);
+            let formed = cubic_rounding(&plane, tri, ray, h);
+            let bound = point_error_bound(&cubic, formed, ray, q, h);
             let (alpha, beta, q, flat_t) = if in_prism {
                 (alpha, beta, q, flat_t)
             } else {
@@ -492,7 +493,9 @@ impl<S: Real> ObjectEdges<S> {
                 (alpha, beta)
             } else {
                 let uv = prism.texture_uv(alpha, beta);
-                let bound = point_error_bound(cubic, ray, T::Vec3::new(uv.x(), uv.y(), h), h);
+                let formed = cubic_rounding(plane, tri, ray, h);
+                let q = T::Vec3::new(uv.x(), uv.y(), h);
+                let bound = point_error_bound(cubic, formed, ray, q, h);
                 let Some(ab) = kept_across_wall(prism, alpha, beta, bound) else {
                     return;
                 };
@@ -752,11 +755,23 @@ fn kept_across_wall<T: Real>(prism: &Prism<T>, alpha: T, beta: T, tolerance: T) 
 
 /// A first-order bound on the error of a candidate point `q` at height `h` on the curve, in
 /// texture units, with a safety factor: the rounding of `q`'s coordinates (a few ulps of their
-/// size) plus the root's error moved along the curve (the Horner bound of the plane cubic over
-/// its slope, times the curve's speed `|du/dh| + |dv/dh|`, from `u = U / D`, `v = V / D`). It
+/// size) plus the root's error moved along the curve (the Horner bound of the plane cubic and
+/// `formed`, the rounding of its coefficients and plane from [`cubic_rounding`], over its
+/// slope, times the curve's speed `|du/dh| + |dv/dh|`, from `u = U / D`, `v = V / D`). It
 /// only chooses between the fast path and the piece search, which is exact on either side of
 /// it; the factor 16 keeps the fast path's decisions well clear of the errors it estimates.
-fn point_error_bound<T: Real>(cubic: &[T; 4], ray: &NonlinearRay<T>, q: T::Vec3, h: T) -> T {
+/// Without `formed`, two coplanar triangles of a feather's vane in tile [62, 29] (planes whose
+/// offsets cancel terms of 62) put their roots 6.8e-13 apart in `h`, each beyond the other's
+/// side of their shared edge by more than the bound (3.0e-13 in texture units), and the ray
+/// passed between them (`nlrt watertight feathers --rays 1048576 --precision f64`, sample
+/// 122007).
+fn point_error_bound<T: Real>(
+    cubic: &[T; 4],
+    formed: T,
+    ray: &NonlinearRay<T>,
+    q: T::Vec3,
+    h: T,
+) -> T {
     let eps = T::EPSILON;
     let size = q.x().abs().max(q.y().abs()).max(h.abs()).max(T::ONE);
     let (_, rounding) = horner_with_bound(cubic, h);
@@ -767,7 +782,7 @@ fn point_error_bound<T: Real>(cubic: &[T; 4], ray: &NonlinearRay<T>, q: T::Vec3,
     // speed = A / |D| + 1 and root error = (6 eps magnitude + eps |h| slope) / slope, as one
     // quotient (infinite where the curve or the cubic is stationary).
     let a = (u_slope - q.x() * d_slope).abs() + (v_slope - q.y() * d_slope).abs();
-    let root = rounding + eps * h.abs() * slope;
+    let root = rounding + formed + eps * h.abs() * slope;
     let denominator = d.abs() * slope;
     let moved = if denominator > T::ZERO {
         (a + d.abs()) * root / denominator

@@ -726,6 +726,32 @@ mod tests {
         );
     }
 
+    /// A ray aimed at the shared edge of two coplanar triangles of a feather's vane (92 and
+    /// 93) in tile [62, 29]: their planes' offsets cancel terms of 62, so their roots lie
+    /// 6.8e-13 apart in `h`, and each point fell beyond the shared edge on the other's side by
+    /// more than the point's error bound while that counted only the cubic's evaluation, not
+    /// the rounding of its coefficients and plane. Both triangles left the point to the other:
+    /// the one f64 leak of `nlrt watertight feathers --rays 1048576 --precision f64`.
+    #[test]
+    fn a_ray_between_coplanar_vane_triangles_hits_in_f64() {
+        let (scene, surface) = small_shell_scene::<f64>("feathers");
+        let truth = TrueShell::new(&surface);
+        let open_edges = open_base_edges(surface.mesh());
+        let aimed = aim(&surface, &truth, &open_edges, scene.camera.eye, 122_007).expect("drawn");
+        assert_eq!(
+            (aimed.target.base, aimed.target.tile, aimed.target.on_edge),
+            (511, [62, 29], true),
+            "the sample aims at the shared edge"
+        );
+        let t_true = aimed.truth.expect("the oracle decides it");
+        let hit = aimed.hit.expect("the tracer hits");
+        assert!(
+            hit.hit.t <= t_true * (1.0 + LEAK_TOLERANCE),
+            "hit at {} beyond the true crossing {t_true}",
+            hit.hit.t
+        );
+    }
+
     /// The nine rays of `nlrt watertight feathers --rays 65536 --precision f32` that leaked
     /// while an `f32` surface traced its prisms in `f32`: aimed at thin barbs in tiles 1 to
     /// 122, at Eq. 6's conditions from 1 to 184, they were missed or hit up to 3% beyond the
