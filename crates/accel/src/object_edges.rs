@@ -281,8 +281,10 @@ impl<S: Real> ObjectEdges<S> {
         // triangle's heights, where a root on an edge at its lowest or highest point may fall).
         let mut candidates: [Option<Candidate<T>>; 3] = [None; 3];
         if tri[1].z() == lo && tri[2].z() == lo && tri[0].z() == lo {
+            // The crossing outside the base triangle too: a point a rounding beyond the wall
+            // is kept on it below, as a root of the cubic is.
             candidates[0] = prism
-                .cross_section_hit(&ray.ray, lo)
+                .cross_section_crossing(&ray.ray, lo)
                 .map(|(t, alpha, beta)| (alpha, beta, lo, Some(t)));
         } else {
             // Solved on the widest window ([`CLAMP_LIMIT`]); a root beyond [`HEIGHT_WINDOW`]

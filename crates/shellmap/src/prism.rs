@@ -150,6 +150,16 @@ impl<T: Real> Prism<T> {
     /// outside. The prism's caps and the flat-microtriangle shortcut both use it.
     #[must_use]
     pub fn cross_section_hit(&self, ray: &crate::Ray<T>, h: T) -> Option<(T, T, T)> {
+        let (t, alpha, beta) = self.cross_section_crossing(ray, h)?;
+        (alpha >= T::ZERO && beta >= T::ZERO && alpha + beta <= T::ONE).then_some((t, alpha, beta))
+    }
+
+    /// Where a world ray crosses the plane of the prism's cross-section at height `h`,
+    /// inside the base triangle or not: `(t, alpha, beta)` (see
+    /// [`Prism::cross_section_hit`]). A caller that keeps points a rounding outside (onto the
+    /// prism's wall, as the shell's object test does) needs the crossing outside too.
+    #[must_use]
+    pub fn cross_section_crossing(&self, ray: &crate::Ray<T>, h: T) -> Option<(T, T, T)> {
         let s0 = self.vertex(0, h);
         let (e0, e1) = (self.vertex(1, h) - s0, self.vertex(2, h) - s0);
         let denom = e0.cross(e1).dot(ray.dir);
@@ -158,7 +168,7 @@ impl<T: Real> Prism<T> {
         }
         let t = e0.cross(e1).dot(s0 - ray.origin) / denom;
         let (alpha, beta) = barycentric_in_plane::<T>(s0, e0, e1, ray.at(t))?;
-        (alpha >= T::ZERO && beta >= T::ZERO && alpha + beta <= T::ONE).then_some((t, alpha, beta))
+        Some((t, alpha, beta))
     }
 }
 

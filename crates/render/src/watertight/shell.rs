@@ -752,6 +752,32 @@ mod tests {
         );
     }
 
+    /// Rays aimed at the cornell box's floor (two flat object triangles at height 0.05) where
+    /// their shared edge meets a base edge of the sphere (`alpha` or `beta` 0): the flat
+    /// shortcut's crossing of the cross-section fell a rounding outside both prisms, and it
+    /// was dropped where a cubic's root would have been kept on the wall. The three f64 leaks
+    /// of `nlrt watertight cornell --rays 1048576 --precision f64`.
+    #[test]
+    fn rays_at_a_flat_floor_on_a_base_edge_hit_in_f64() {
+        let (scene, surface) = small_shell_scene::<f64>("cornell");
+        let truth = TrueShell::new(&surface);
+        let open_edges = open_base_edges(surface.mesh());
+        for k in [394_699, 472_661, 869_528] {
+            let aimed = aim(&surface, &truth, &open_edges, scene.camera.eye, k).expect("drawn");
+            assert!(
+                aimed.target.alpha == 0.0 || aimed.target.beta == 0.0,
+                "sample {k} aims at a base edge"
+            );
+            let t_true = aimed.truth.expect("the oracle decides it");
+            let hit = aimed.hit.unwrap_or_else(|| panic!("sample {k}: no hit"));
+            assert!(
+                hit.hit.t <= t_true * (1.0 + LEAK_TOLERANCE),
+                "sample {k}: hit at {} beyond the true crossing {t_true}",
+                hit.hit.t
+            );
+        }
+    }
+
     /// The nine rays of `nlrt watertight feathers --rays 65536 --precision f32` that leaked
     /// while an `f32` surface traced its prisms in `f32`: aimed at thin barbs in tiles 1 to
     /// 122, at Eq. 6's conditions from 1 to 184, they were missed or hit up to 3% beyond the
