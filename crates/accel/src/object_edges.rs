@@ -781,8 +781,8 @@ fn point_error_bound<T: Real>(
     let (d, d_slope) = value_and_slope(&ray.d, h);
     let u_slope = value_and_slope(&ray.u, h).1;
     let v_slope = value_and_slope(&ray.v, h).1;
-    // speed = A / |D| + 1 and root error = (6 eps magnitude + eps |h| slope) / slope, as one
-    // quotient (infinite where the curve or the cubic is stationary).
+    // speed = A / |D| + 1 and root error = (Horner bound + formed + eps |h| slope) / slope,
+    // as one quotient (infinite where the curve or the cubic is stationary).
     let a = (u_slope - q.x() * d_slope).abs() + (v_slope - q.y() * d_slope).abs();
     let root = rounding + formed + eps * h.abs() * slope;
     let denominator = d.abs() * slope;
