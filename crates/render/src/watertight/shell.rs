@@ -699,6 +699,30 @@ mod tests {
         (scene, surface)
     }
 
+    /// Sample `k` of `nlrt watertight <name> --precision f64` (small scene): asserts that it
+    /// aims at `(base triangle, tile, on a shared edge)` and that the tracer hits within the
+    /// tolerance of the oracle's crossing; returns its target.
+    fn aimed_sample_hits_in_f64(name: &str, k: usize, aims_at: (usize, [i32; 2], bool)) -> Target {
+        let (scene, surface) = small_shell_scene::<f64>(name);
+        let truth = TrueShell::new(&surface);
+        let open_edges = open_base_edges(surface.mesh());
+        let aimed = aim(&surface, &truth, &open_edges, scene.camera.eye, k).expect("drawn");
+        let target = &aimed.target;
+        assert_eq!(
+            (target.base, target.tile, target.on_edge),
+            aims_at,
+            "sample {k}'s target"
+        );
+        let t_true = aimed.truth.expect("the oracle decides it");
+        let hit = aimed.hit.unwrap_or_else(|| panic!("sample {k}: no hit"));
+        assert!(
+            hit.hit.t <= t_true * (1.0 + LEAK_TOLERANCE),
+            "sample {k}: hit at {} beyond the true crossing {t_true}",
+            hit.hit.t
+        );
+        aimed.target
+    }
+
     /// A ray aimed at a feather vane's ridge (an edge along the highest height of both its
     /// triangles) in tile [49, 18], far from the origin: the separating plane's crossing
     /// falls 7.9e-15 beyond the triangles' heights, and one triangle's root 6.6e-15, both
@@ -708,22 +732,7 @@ mod tests {
     /// of `nlrt watertight feathers --rays 65536`.
     #[test]
     fn a_ray_at_a_far_vane_ridge_hits_in_f64() {
-        let (scene, surface) = small_shell_scene::<f64>("feathers");
-        let truth = TrueShell::new(&surface);
-        let open_edges = open_base_edges(surface.mesh());
-        let aimed = aim(&surface, &truth, &open_edges, scene.camera.eye, 28356).expect("drawn");
-        assert_eq!(
-            (aimed.target.base, aimed.target.tile, aimed.target.on_edge),
-            (304, [49, 18], true),
-            "the sample aims at the ridge"
-        );
-        let t_true = aimed.truth.expect("the oracle decides it");
-        let hit = aimed.hit.expect("the tracer hits");
-        assert!(
-            hit.hit.t <= t_true * (1.0 + LEAK_TOLERANCE),
-            "hit at {} beyond the true crossing {t_true}",
-            hit.hit.t
-        );
+        aimed_sample_hits_in_f64("feathers", 28_356, (304, [49, 18], true));
     }
 
     /// A ray aimed at the shared edge of two coplanar triangles of a feather's vane (92 and
@@ -734,22 +743,7 @@ mod tests {
     /// the one f64 leak of `nlrt watertight feathers --rays 1048576 --precision f64`.
     #[test]
     fn a_ray_between_coplanar_vane_triangles_hits_in_f64() {
-        let (scene, surface) = small_shell_scene::<f64>("feathers");
-        let truth = TrueShell::new(&surface);
-        let open_edges = open_base_edges(surface.mesh());
-        let aimed = aim(&surface, &truth, &open_edges, scene.camera.eye, 122_007).expect("drawn");
-        assert_eq!(
-            (aimed.target.base, aimed.target.tile, aimed.target.on_edge),
-            (511, [62, 29], true),
-            "the sample aims at the shared edge"
-        );
-        let t_true = aimed.truth.expect("the oracle decides it");
-        let hit = aimed.hit.expect("the tracer hits");
-        assert!(
-            hit.hit.t <= t_true * (1.0 + LEAK_TOLERANCE),
-            "hit at {} beyond the true crossing {t_true}",
-            hit.hit.t
-        );
+        aimed_sample_hits_in_f64("feathers", 122_007, (511, [62, 29], true));
     }
 
     /// Rays aimed at the cornell box's floor (two flat object triangles at height 0.05) where
@@ -759,21 +753,15 @@ mod tests {
     /// of `nlrt watertight cornell --rays 1048576 --precision f64`.
     #[test]
     fn rays_at_a_flat_floor_on_a_base_edge_hit_in_f64() {
-        let (scene, surface) = small_shell_scene::<f64>("cornell");
-        let truth = TrueShell::new(&surface);
-        let open_edges = open_base_edges(surface.mesh());
-        for k in [394_699, 472_661, 869_528] {
-            let aimed = aim(&surface, &truth, &open_edges, scene.camera.eye, k).expect("drawn");
+        for (k, base, tile) in [
+            (394_699, 1, [0, 0]),
+            (472_661, 560, [12, 12]),
+            (869_528, 560, [12, 12]),
+        ] {
+            let target = aimed_sample_hits_in_f64("cornell", k, (base, tile, true));
             assert!(
-                aimed.target.alpha == 0.0 || aimed.target.beta == 0.0,
+                target.alpha == 0.0 || target.beta == 0.0,
                 "sample {k} aims at a base edge"
-            );
-            let t_true = aimed.truth.expect("the oracle decides it");
-            let hit = aimed.hit.unwrap_or_else(|| panic!("sample {k}: no hit"));
-            assert!(
-                hit.hit.t <= t_true * (1.0 + LEAK_TOLERANCE),
-                "sample {k}: hit at {} beyond the true crossing {t_true}",
-                hit.hit.t
             );
         }
     }
