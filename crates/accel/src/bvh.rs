@@ -516,6 +516,44 @@ impl<T: Real> Bvh4<T> {
         cost
     }
 
+    /// The expected cost of a query through the tree, each child-box test weighted
+    /// `box_test` and each primitive test `primitive_test`: a node reached tests its used
+    /// children's boxes, a leaf entered tests its primitives, and a box is reached with the
+    /// probability `reach(box) / reach(root)` (the root always): for straight rays uniform
+    /// over the bounds, [`Aabb::half_area`] (the surface-area heuristic); for the shell's
+    /// texture-space curves, the box's uv rectangle (see `ShellObject::new`). Unlike
+    /// [`Bvh4::sah_cost`] (every slot counted, both weights 1) it prices unused slots at
+    /// nothing, so trees of different leaf sizes over the same primitives compare. 0 for an
+    /// empty tree.
+    #[must_use]
+    pub fn weighted_cost(
+        &self,
+        box_test: f64,
+        primitive_test: f64,
+        reach: impl Fn(&Aabb<T>) -> f64,
+    ) -> f64 {
+        let root = reach(&self.root_bounds);
+        if self.nodes.is_empty() || !(root > 0.0) {
+            return 0.0;
+        }
+        let used = |node: &Node4<T>| (0..ARITY).filter(|&c| node.index[c] != EMPTY_CHILD).count();
+        let mut cost = used(&self.nodes[0]) as f64 * box_test;
+        for node in &self.nodes {
+            for slot in 0..ARITY {
+                if node.index[slot] == EMPTY_CHILD {
+                    continue;
+                }
+                let tests = if node.count[slot] > 0 {
+                    f64::from(node.count[slot]) * primitive_test
+                } else {
+                    used(&self.nodes[node.index[slot] as usize]) as f64 * box_test
+                };
+                cost += reach(&node.bounds[slot]) / root * tests;
+            }
+        }
+        cost
+    }
+
     /// Nearest-first traversal: calls `hit(primitive, t_max)` for every primitive whose leaf
     /// box the ray enters before the current `t_max`; `hit` returns the distance of a hit
     /// nearer than `t_max`, which then shrinks it. Returns the final `t_max` (the input when
@@ -799,6 +837,43 @@ mod tests {
             });
             assert_eq!(t, linear);
         }
+    }
+
+    /// Two unit cubes half a unit apart (so the SAH keeps them in one leaf when it may) in
+    /// one leaf of two or in two leaves under one node: the weighted cost by hand, and the
+    /// leaf size that wins flips with the primitive's price.
+    #[test]
+    fn weighted_cost_prices_box_and_primitive_tests() {
+        let cube =
+            |x: f64| Aabb::of_points([DVec3::new(x, 0.0, 0.0), DVec3::new(x + 1.0, 1.0, 1.0)]);
+        let bs = [cube(0.0), cube(0.5)];
+        // Root box 1.5 x 1 x 1: half area 1.5 + 1.5 + 1 = 4; each cube's 3.
+        let (one, two) = (Bvh4::build(&bs, 1), Bvh4::build(&bs, 2));
+        let (box_test, primitive_test) = (1.0, 5.0);
+        let area = |b: &Aabb<f64>| b.half_area();
+        let cost = |t: &Bvh4<f64>, primitive_test| t.weighted_cost(1.0, primitive_test, area);
+        // Leaves of one: the root's two boxes, then each leaf entered with probability 3/4.
+        let expected_one = 2.0 * box_test + 2.0 * (3.0 / 4.0) * primitive_test;
+        // One leaf of two: the root's one box, then the leaf (the whole root) entered always.
+        let expected_two = box_test + 2.0 * primitive_test;
+        assert!((cost(&one, primitive_test) - expected_one).abs() < 1e-12);
+        assert_eq!(
+            two.nodes().len(),
+            1,
+            "one leaf of two: {:?}",
+            two.nodes()[0].count
+        );
+        assert!((cost(&two, primitive_test) - expected_two).abs() < 1e-12);
+        assert!(cost(&one, 5.0) < cost(&two, 5.0));
+        assert!(cost(&one, 0.1) > cost(&two, 0.1));
+        // Another measure of reach: the x extent (1.5 for the root, 1 for each cube).
+        let x_extent = |b: &Aabb<f64>| b.hi[0] - b.lo[0];
+        let by_extent = 2.0 * box_test + 2.0 * (1.0 / 1.5) * primitive_test;
+        assert!((one.weighted_cost(box_test, primitive_test, x_extent) - by_extent).abs() < 1e-12);
+        assert_eq!(
+            Bvh4::<f64>::build(&[], 2).weighted_cost(1.0, 1.5, area),
+            0.0
+        );
     }
 
     #[test]

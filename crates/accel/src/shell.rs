@@ -83,6 +83,28 @@ pub struct ShellObject<T: Real> {
     pub dropped_degenerate: usize,
 }
 
+/// The largest leaf the object's BVH is built with (each size up to it is tried).
+const MAX_OBJECT_LEAF: usize = 4;
+
+/// An object-triangle test's cost in box tests of the object's BVH, for choosing its leaf
+/// size: about one in time. Instructions put it at about 1.5 (`valgrind --tool=callgrind
+/// --toggle-collect='*trace_all*' traversal_counts <scene> paper f32 64` on the five shell
+/// scenes with leaves of 2 and of 4, 2026-12-06: about 1,800 instructions per box test and
+/// 2,800 per triangle test), but a box test's divisions (its uv enclosure) weigh more in
+/// time than in instructions: at 1.5 the feathers (leaf 3) traced 1-4% slower than with
+/// leaves of 4 on the bench's stream; at 1 the choices are the faster ones of each scene
+/// (leaves of 2 on the scales, 4 on the others).
+const TRIANGLE_TEST_COST: f64 = 1.0;
+
+/// [`Bvh4::weighted_cost`] of an object's tree: a box is reached with the probability of
+/// its uv rectangle's share of the root's, as the first test a box meets is the curve's uv
+/// enclosure over the tile's heights against that rectangle (`intersect_tile`), which
+/// short stretches of curve pass in proportion to its area.
+fn object_tree_cost<T: Real>(tree: &Bvh4<T>) -> f64 {
+    let uv_area = |b: &Aabb<T>| (b.hi[0] - b.lo[0]).to_f64() * (b.hi[1] - b.lo[1]).to_f64();
+    tree.weighted_cost(1.0, TRIANGLE_TEST_COST, uv_area)
+}
+
 impl<T: Real> ShellObject<T> {
     /// An object from triangles with vertices `(u, v, h)` in `[0, 1]^3`; collinear triangles
     /// (no area, so nothing to hit) are dropped and counted.
@@ -114,7 +136,12 @@ impl<T: Real> ShellObject<T> {
             .iter()
             .map(|t| Aabb::of_points(t.iter().copied()))
             .collect();
-        let bvh = Bvh4::build(&boxes, 4);
+        // The leaf size whose tree costs least (see `TRIANGLE_TEST_COST`): thin, overlapping
+        // triangles (the scales) want small leaves, where larger ones save box tests.
+        let bvh = (1..=MAX_OBJECT_LEAF)
+            .map(|leaf| Bvh4::build(&boxes, leaf))
+            .min_by(|a, b| object_tree_cost(a).total_cmp(&object_tree_cost(b)))
+            .unwrap_or_else(|| Bvh4::build(&boxes, MAX_OBJECT_LEAF));
         let b = bvh.bounds();
         let edges = ObjectEdges::new(&kept);
         Ok(Self {
@@ -596,4 +623,49 @@ fn traced_in_f64<T: Real>() -> bool {
 fn widened<T: Real, C: Real>(tri: &[T::Vec3; 3]) -> [C::Vec3; 3] {
     let w = |v: T| C::from_f64(v.to_f64());
     tri.map(|p| C::Vec3::new(w(p.x()), w(p.y()), w(p.z())))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nlrt_poly::glam::DVec3;
+
+    /// The object's tree is the cheapest of the leaf sizes tried, for thin overlapping
+    /// triangles (where small leaves win) and for a grid of small ones.
+    #[test]
+    fn the_object_tree_is_the_cheapest_leaf_size() {
+        let mut r = crate::test_util::unit_randoms(2024);
+        let slivers: Vec<[DVec3; 3]> = (0..64)
+            .map(|_| {
+                let (u, v) = (r(), r());
+                [
+                    DVec3::new(u, v, 0.0),
+                    DVec3::new(1.0 - u, 1.0 - v, 1.0),
+                    DVec3::new(u, 1.0 - v, r()),
+                ]
+            })
+            .collect();
+        let grid: Vec<[DVec3; 3]> = (0..64)
+            .map(|i| {
+                let (x, y) = (f64::from(i % 8) / 8.0, f64::from(i / 8) / 8.0);
+                [
+                    DVec3::new(x, y, 0.1),
+                    DVec3::new(x + 0.1, y, 0.2),
+                    DVec3::new(x, y + 0.1, 0.3),
+                ]
+            })
+            .collect();
+        for triangles in [slivers, grid] {
+            let boxes: Vec<Aabb<f64>> = triangles
+                .iter()
+                .map(|t| Aabb::of_points(t.iter().copied()))
+                .collect();
+            let object = ShellObject::<f64>::new(triangles).unwrap();
+            let chosen = object_tree_cost(&object.bvh);
+            for leaf in 1..=MAX_OBJECT_LEAF {
+                let other = object_tree_cost(&Bvh4::build(&boxes, leaf));
+                assert!(chosen <= other, "leaf {leaf}: {other} < {chosen}");
+            }
+        }
+    }
 }
