@@ -184,7 +184,29 @@ enum Binary<T> {
     Inner {
         bounds: Aabb<T>,
         children: [usize; 2],
+        /// Its primitives, `count` from `first` in the order (contiguous below any node).
+        first: u32,
+        count: u32,
     },
+}
+
+impl<T: Real> Binary<T> {
+    /// As a leaf when it holds at most `leaf_at` primitives: `(bounds, first, count)`.
+    fn as_leaf(&self, leaf_at: usize) -> Option<(Aabb<T>, u32, u32)> {
+        match *self {
+            Binary::Leaf {
+                bounds,
+                first,
+                count,
+            } => Some((bounds, first, count)),
+            Binary::Inner {
+                bounds,
+                first,
+                count,
+                ..
+            } => (count as usize <= leaf_at).then_some((bounds, first, count)),
+        }
+    }
 }
 
 impl<T: Real> Build<'_, T> {
@@ -309,6 +331,41 @@ impl<T: Real> Bvh4<T> {
     /// finite hit); [`Bvh4::primitive_count`] tells how many went in.
     #[must_use]
     pub fn build(boxes: &[Aabb<T>], max_leaf: usize) -> Self {
+        let binary = BinaryTree::build(boxes, max_leaf);
+        binary.collapsed(0, boxes.len())
+    }
+
+    /// Of the trees [`Bvh4::build`] gives with leaves of `1..=max_leaf` primitives (`max_leaf`
+    /// at most 8), the one `cost` prices lowest (the first of equals), from one build: a node
+    /// of at most 8 primitives is split at its median whatever the leaf size, and a larger
+    /// one the same way for each of these sizes, so the tree with leaves of `k` is the one
+    /// with leaves of 1 cut at its first nodes of at most `k` primitives (the same
+    /// primitives in each leaf; their order within a leaf may differ).
+    #[must_use]
+    pub fn build_cheapest(boxes: &[Aabb<T>], max_leaf: usize, cost: impl Fn(&Self) -> f64) -> Self {
+        let binary = BinaryTree::build(boxes, 1);
+        let mut best = binary.collapsed(0, boxes.len());
+        let mut best_cost = cost(&best);
+        for leaf_at in 2..=max_leaf.min(SMALL_NODE) {
+            let tree = binary.collapsed(leaf_at, boxes.len());
+            let c = cost(&tree);
+            if c < best_cost {
+                (best, best_cost) = (tree, c);
+            }
+        }
+        best
+    }
+}
+
+/// The binary tree of a build, before its collapse to four children per node.
+struct BinaryTree<T> {
+    nodes: Vec<Binary<T>>,
+    order: Vec<u32>,
+}
+
+impl<T: Real> BinaryTree<T> {
+    /// The binary tree of [`Bvh4::build`].
+    fn build(boxes: &[Aabb<T>], max_leaf: usize) -> Self {
         let max_leaf = max_leaf.max(1);
         let mut order: Vec<u32> = (0..boxes.len() as u32)
             .filter(|&i| boxes[i as usize].is_finite())
@@ -339,8 +396,6 @@ impl<T: Real> Bvh4<T> {
             return Self {
                 nodes: Vec::new(),
                 order,
-                root_bounds: Aabb::EMPTY,
-                built_from: boxes.len(),
             };
         }
         // (start, end, slot in `binary` to fill)
@@ -381,6 +436,8 @@ impl<T: Real> Bvh4<T> {
                     binary[slot] = Binary::Inner {
                         bounds,
                         children: [l, r],
+                        first: start as u32,
+                        count: (end - start) as u32,
                     };
                     let sides = build.children.take();
                     stack.push((start, start + mid, l, depth + 1, sides.map(|s| s[0])));
@@ -388,19 +445,38 @@ impl<T: Real> Bvh4<T> {
                 }
             }
         }
-        let root_bounds = match &binary[0] {
-            Binary::Leaf { bounds, .. } | Binary::Inner { bounds, .. } => *bounds,
-        };
-        let mut nodes = Vec::new();
-        collapse(&binary, 0, &mut nodes);
         Self {
-            nodes,
+            nodes: binary,
             order,
-            root_bounds,
-            built_from: boxes.len(),
         }
     }
 
+    /// The 4-ary tree, every node of at most `leaf_at` primitives a leaf (0: the binary
+    /// tree's leaves), over `built_from` boxes.
+    fn collapsed(&self, leaf_at: usize, built_from: usize) -> Bvh4<T> {
+        let Some(root) = self.nodes.first() else {
+            return Bvh4 {
+                nodes: Vec::new(),
+                order: self.order.clone(),
+                root_bounds: Aabb::EMPTY,
+                built_from,
+            };
+        };
+        let root_bounds = match root {
+            Binary::Leaf { bounds, .. } | Binary::Inner { bounds, .. } => *bounds,
+        };
+        let mut nodes = Vec::new();
+        collapse(&self.nodes, 0, leaf_at, &mut nodes);
+        Bvh4 {
+            nodes,
+            order: self.order.clone(),
+            root_bounds,
+            built_from,
+        }
+    }
+}
+
+impl<T: Real> Bvh4<T> {
     /// Primitives in the tree.
     #[must_use]
     pub fn primitive_count(&self) -> usize {
@@ -616,9 +692,14 @@ impl<T: Real> Bvh4<T> {
     }
 }
 
-/// Collapses the binary subtree at `b` into 4-ary nodes appended to `nodes`; returns the
-/// node's index.
-fn collapse<T: Real>(binary: &[Binary<T>], b: usize, nodes: &mut Vec<Node4<T>>) -> u32 {
+/// Collapses the binary subtree at `b` into 4-ary nodes appended to `nodes`, each binary
+/// node of at most `leaf_at` primitives a leaf; returns the node's index.
+fn collapse<T: Real>(
+    binary: &[Binary<T>],
+    b: usize,
+    leaf_at: usize,
+    nodes: &mut Vec<Node4<T>>,
+) -> u32 {
     let me = nodes.len();
     nodes.push(Node4 {
         bounds: [Aabb::EMPTY; ARITY],
@@ -626,21 +707,24 @@ fn collapse<T: Real>(binary: &[Binary<T>], b: usize, nodes: &mut Vec<Node4<T>>) 
         count: [0; ARITY],
     });
     // Children: open the binary children, then open inner grandchildren while room remains.
-    let mut kids: Vec<usize> = match &binary[b] {
-        Binary::Inner { children, .. } => children.to_vec(),
-        Binary::Leaf { .. } => alloc::vec![b],
-    };
-    loop {
-        if kids.len() >= ARITY {
-            break;
+    let (mut kids, mut n) = ([0usize; ARITY], 1);
+    match &binary[b] {
+        Binary::Inner { children, .. } if binary[b].as_leaf(leaf_at).is_none() => {
+            kids[..2].copy_from_slice(children);
+            n = 2;
         }
+        _ => kids[0] = b,
+    }
+    while n < ARITY {
         // Open the largest inner child.
-        let pick = kids
+        let pick = kids[..n]
             .iter()
             .enumerate()
             .filter_map(|(i, &k)| match &binary[k] {
-                Binary::Inner { bounds, .. } => Some((i, bounds.half_area())),
-                Binary::Leaf { .. } => None,
+                Binary::Inner { bounds, .. } if binary[k].as_leaf(leaf_at).is_none() => {
+                    Some((i, bounds.half_area()))
+                }
+                _ => None,
             })
             .fold(None::<(usize, T)>, |best, (i, a)| match best {
                 Some((_, ba)) if !(a > ba) => best,
@@ -652,25 +736,19 @@ fn collapse<T: Real>(binary: &[Binary<T>], b: usize, nodes: &mut Vec<Node4<T>>) 
         };
         let children = *children;
         kids[i] = children[0];
-        kids.push(children[1]);
+        kids[n] = children[1];
+        n += 1;
     }
-    for (slot, &k) in kids.iter().enumerate() {
-        match &binary[k] {
-            Binary::Leaf {
-                bounds,
-                first,
-                count,
-            } => {
-                nodes[me].bounds[slot] = *bounds;
-                nodes[me].index[slot] = *first;
-                nodes[me].count[slot] = *count;
-            }
-            Binary::Inner { bounds, .. } => {
-                let child = collapse(binary, k, nodes);
-                nodes[me].bounds[slot] = *bounds;
-                nodes[me].index[slot] = child;
-                nodes[me].count[slot] = 0;
-            }
+    for (slot, &k) in kids[..n].iter().enumerate() {
+        if let Some((bounds, first, count)) = binary[k].as_leaf(leaf_at) {
+            nodes[me].bounds[slot] = bounds;
+            nodes[me].index[slot] = first;
+            nodes[me].count[slot] = count;
+        } else if let Binary::Inner { bounds, .. } = &binary[k] {
+            let child = collapse(binary, k, leaf_at, nodes);
+            nodes[me].bounds[slot] = *bounds;
+            nodes[me].index[slot] = child;
+            nodes[me].count[slot] = 0;
         }
     }
     me as u32
@@ -874,6 +952,43 @@ mod tests {
             Bvh4::<f64>::build(&[], 2).weighted_cost(1.0, 1.5, area),
             0.0
         );
+    }
+
+    /// The cheapest build's candidates are the trees of `build` with each leaf size: the
+    /// same nodes, boxes and leaf primitives (the order within a leaf aside).
+    #[test]
+    fn build_cheapest_chooses_among_the_builds_of_each_leaf_size() {
+        let bs = boxes(700);
+        let leaves = |t: &Bvh4<f64>| {
+            let mut out = Vec::new();
+            for node in t.nodes() {
+                for slot in (0..ARITY).filter(|&s| Bvh4::is_used(node, s)) {
+                    let (index, count) = (node.index[slot] as usize, node.count[slot] as usize);
+                    let mut set: Vec<u32> = t.primitive_order()[index..index + count].to_vec();
+                    set.sort_unstable();
+                    out.push((
+                        node.bounds[slot],
+                        if count > 0 {
+                            set
+                        } else {
+                            alloc::vec![index as u32]
+                        },
+                    ));
+                }
+            }
+            out
+        };
+        for k in 1..=4usize {
+            let largest_leaf =
+                |t: &Bvh4<f64>| t.nodes().iter().flat_map(|n| n.count).max().unwrap_or(0) as usize;
+            let chosen = Bvh4::build_cheapest(&bs, 4, |t| largest_leaf(t).abs_diff(k) as f64);
+            let built = Bvh4::build(&bs, k);
+            assert_eq!(largest_leaf(&built), k);
+            assert_eq!(leaves(&chosen), leaves(&built), "leaves of {k}");
+            assert_eq!(chosen.bounds(), built.bounds());
+        }
+        let none = Bvh4::<f64>::build_cheapest(&[], 4, |_| 0.0);
+        assert_eq!(none.primitive_count(), 0);
     }
 
     #[test]

@@ -138,10 +138,7 @@ impl<T: Real> ShellObject<T> {
             .collect();
         // The leaf size whose tree costs least (see `TRIANGLE_TEST_COST`): thin, overlapping
         // triangles (the scales) want small leaves, where larger ones save box tests.
-        let bvh = (1..=MAX_OBJECT_LEAF)
-            .map(|leaf| Bvh4::build(&boxes, leaf))
-            .min_by(|a, b| object_tree_cost(a).total_cmp(&object_tree_cost(b)))
-            .unwrap_or_else(|| Bvh4::build(&boxes, MAX_OBJECT_LEAF));
+        let bvh = Bvh4::build_cheapest(&boxes, MAX_OBJECT_LEAF, object_tree_cost);
         let b = bvh.bounds();
         let edges = ObjectEdges::new(&kept);
         Ok(Self {
