@@ -336,7 +336,8 @@ impl<T: Real> Bvh4<T> {
     }
 
     /// Of the trees [`Bvh4::build`] gives with leaves of `1..=max_leaf` primitives (`max_leaf`
-    /// at most 8), the one `cost` prices lowest (the first of equals), from one build: a node
+    /// at most 8), the one `cost` prices lowest (of equals, the one with the largest leaves:
+    /// the fewest nodes, and `build(max_leaf)` where `cost` cannot tell), from one build: a node
     /// of at most 8 primitives is split at its median whatever the leaf size, and a larger
     /// one the same way for each of these sizes, so the tree with leaves of `k` is the one
     /// with leaves of 1 cut at its first nodes of at most `k` primitives (the same
@@ -344,9 +345,10 @@ impl<T: Real> Bvh4<T> {
     #[must_use]
     pub fn build_cheapest(boxes: &[Aabb<T>], max_leaf: usize, cost: impl Fn(&Self) -> f64) -> Self {
         let binary = BinaryTree::build(boxes, 1);
-        let mut best = binary.collapsed(0, boxes.len());
+        let largest = max_leaf.clamp(1, SMALL_NODE);
+        let mut best = binary.collapsed(largest, boxes.len());
         let mut best_cost = cost(&best);
-        for leaf_at in 2..=max_leaf.min(SMALL_NODE) {
+        for leaf_at in (1..largest).rev() {
             let tree = binary.collapsed(leaf_at, boxes.len());
             let c = cost(&tree);
             if c < best_cost {
@@ -989,6 +991,9 @@ mod tests {
         }
         let none = Bvh4::<f64>::build_cheapest(&[], 4, |_| 0.0);
         assert_eq!(none.primitive_count(), 0);
+        // A cost that cannot tell the trees apart keeps the largest leaves.
+        let indifferent = Bvh4::build_cheapest(&bs, 4, |_| 1.0);
+        assert_eq!(leaves(&indifferent), leaves(&Bvh4::build(&bs, 4)));
     }
 
     #[test]
