@@ -567,31 +567,8 @@ impl<T: Real> Bvh4<T> {
     /// 0 for an empty tree.
     #[must_use]
     pub fn sah_cost(&self) -> f64 {
-        let root = self.root_bounds.half_area().to_f64();
-        if self.nodes.is_empty() || !(root > 0.0) {
-            return 0.0;
-        }
-        let mut cost = 0.0;
-        // Every node visited tests its children's boxes; every leaf entered tests its
-        // primitives. A node's visiting probability is its box's area over the root's.
-        let mut visit = |bounds: &Aabb<T>, tests: f64| {
-            cost += bounds.half_area().to_f64() / root * tests;
-        };
-        visit(&self.root_bounds, ARITY as f64);
-        for node in &self.nodes {
-            for slot in 0..ARITY {
-                if node.index[slot] == EMPTY_CHILD {
-                    continue;
-                }
-                let tests = if node.count[slot] > 0 {
-                    f64::from(node.count[slot])
-                } else {
-                    ARITY as f64
-                };
-                visit(&node.bounds[slot], tests);
-            }
-        }
-        cost
+        // Every slot of a node reached counted as a box test.
+        self.expected_tests(|b| b.half_area().to_f64(), |_| ARITY as f64, 1.0)
     }
 
     /// The expected cost of a query through the tree, each child-box test weighted
@@ -610,12 +587,28 @@ impl<T: Real> Bvh4<T> {
         primitive_test: f64,
         reach: impl Fn(&Aabb<T>) -> f64,
     ) -> f64 {
+        let used = |node: &Node4<T>| (0..ARITY).filter(|&c| node.index[c] != EMPTY_CHILD).count();
+        self.expected_tests(reach, |node| used(node) as f64 * box_test, primitive_test)
+    }
+
+    /// The cost of [`Bvh4::sah_cost`] and [`Bvh4::weighted_cost`]: a node reached (with the
+    /// probability `reach(its box) / reach(root)`, the root always) costs `node_tests(node)`,
+    /// a leaf entered `primitive_test` per primitive. 0 for an empty tree or a root of no
+    /// reach.
+    fn expected_tests(
+        &self,
+        reach: impl Fn(&Aabb<T>) -> f64,
+        node_tests: impl Fn(&Node4<T>) -> f64,
+        primitive_test: f64,
+    ) -> f64 {
         let root = reach(&self.root_bounds);
-        if self.nodes.is_empty() || !(root > 0.0) {
+        let Some(first) = self.nodes.first() else {
+            return 0.0;
+        };
+        if !(root > 0.0) {
             return 0.0;
         }
-        let used = |node: &Node4<T>| (0..ARITY).filter(|&c| node.index[c] != EMPTY_CHILD).count();
-        let mut cost = used(&self.nodes[0]) as f64 * box_test;
+        let mut cost = node_tests(first);
         for node in &self.nodes {
             for slot in 0..ARITY {
                 if node.index[slot] == EMPTY_CHILD {
@@ -624,7 +617,7 @@ impl<T: Real> Bvh4<T> {
                 let tests = if node.count[slot] > 0 {
                     f64::from(node.count[slot]) * primitive_test
                 } else {
-                    used(&self.nodes[node.index[slot] as usize]) as f64 * box_test
+                    node_tests(&self.nodes[node.index[slot] as usize])
                 };
                 cost += reach(&node.bounds[slot]) / root * tests;
             }
