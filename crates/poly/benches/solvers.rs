@@ -2,9 +2,12 @@
 //! crate for f32 and f64, and the f64-only `kurbo::common::solve_cubic` (Blinn's method) and
 //! `polycool` (Yuksel's interval solver, target accuracy 1e-15), on the same cubics: all roots
 //! in `[0, 1]` and on the whole line. Accuracy of the same solvers on the oracle's families is
-//! measured by `nlrt solvers`.
+//! measured by `nlrt solvers`. The fair harness (`cubic_fair_in_unit`, `cubic_peer_wrapper`)
+//! times each solver through one loop over 200,000 distinct cubics, kurbo also called
+//! directly, and the peer wrapper's own cost.
 //!
-//! `cargo bench -p nlrt-poly --bench solvers`
+//! `cargo bench -p nlrt-poly --bench solvers` (the fair harness alone:
+//! `cargo bench -p nlrt-poly --bench solvers -- 'cubic_fair|cubic_peer'`)
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use nlrt_oracle::families::{RandomFamily, SplitMix64, cubic_from_roots};
@@ -259,7 +262,97 @@ fn bench_type<T: Real + roots::FloatType>(crit: &mut Criterion) {
     g.finish();
 }
 
+/// Distinct cubics in the fair harness: many more than fit the branch predictor's history,
+/// so no solver is timed on a pattern it has learnt.
+const FAIR_SAMPLES: usize = 200_000;
+
+/// The sum of the roots in `[lo, hi]` that `solve` reports over `cubics`: every solver of the
+/// fair harness is timed through this one loop, summing its roots so that none of its work
+/// can be optimised away.
+#[inline(always)]
+fn root_sum<T: Real>(cubics: &[[T; 4]], mut solve: impl FnMut([T; 4]) -> Roots<T>) -> T {
+    cubics.iter().fold(T::ZERO, |sum, &c| {
+        solve(black_box(c)).iter().fold(sum, |s, &r| s + r)
+    })
+}
+
+/// The fair harness (same process, same loop, distinct random cubics with three roots in
+/// `[0, 1]`, solved on `[0, 1]`): nlrt-poly in f64 and f32; `kurbo::common::solve_cubic`
+/// called directly with its roots filtered to `[0, 1]` in the loop, as a user of kurbo would
+/// write it (unsorted, repeats kept: less than nlrt-poly's contract); and kurbo through
+/// `nlrt_oracle::peers::kurbo_cubic`, which adds the sort and the distinctness that make its
+/// answer comparable (the `cubic_peer_wrapper` group times that addition alone).
+fn bench_fair(crit: &mut Criterion) {
+    let mut rng = SplitMix64::new(0xfa1e);
+    let cubics: Vec<[f64; 4]> = (0..FAIR_SAMPLES)
+        .map(|_| {
+            RandomFamily::ThreeRootsInUnit
+                .sample::<f64>(&mut rng)
+                .coeffs
+        })
+        .collect();
+    let narrow: Vec<[f32; 4]> = cubics.iter().map(|c| c.map(|v| v as f32)).collect();
+    let mut g = crit.benchmark_group("cubic_fair_in_unit");
+    g.throughput(Throughput::Elements(FAIR_SAMPLES as u64));
+    g.bench_function("nlrt/f64", |b| {
+        b.iter(|| root_sum(&cubics, |c| solve_cubic_in(c, 0.0, 1.0)))
+    });
+    g.bench_function("kurbo_filtered/f64", |b| {
+        b.iter(|| {
+            cubics.iter().fold(0.0, |sum, &c| {
+                let c = black_box(c);
+                kurbo::common::solve_cubic(c[0], c[1], c[2], c[3])
+                    .iter()
+                    .filter(|&&r| (0.0..=1.0).contains(&r))
+                    .fold(sum, |s, &r| s + r)
+            })
+        })
+    });
+    g.bench_function("kurbo_wrapped/f64", |b| {
+        b.iter(|| root_sum(&cubics, |c| peers::kurbo_cubic(c, 0.0, 1.0)))
+    });
+    g.bench_function("nlrt/f32", |b| {
+        b.iter(|| root_sum(&narrow, |c| solve_cubic_in(c, 0.0, 1.0)))
+    });
+    g.finish();
+
+    // The wrapper alone: kurbo's answers computed beforehand, then filtered in the loop (as
+    // above) or passed through `peers::roots_in` (filter, sort, repeats once).
+    let found: Vec<([f64; 3], usize)> = cubics
+        .iter()
+        .map(|c| {
+            let r = kurbo::common::solve_cubic(c[0], c[1], c[2], c[3]);
+            let mut a = [0.0; 3];
+            a[..r.len()].copy_from_slice(&r);
+            (a, r.len())
+        })
+        .collect();
+    let mut g = crit.benchmark_group("cubic_peer_wrapper");
+    g.throughput(Throughput::Elements(FAIR_SAMPLES as u64));
+    g.bench_function("filter_in_loop/f64", |b| {
+        b.iter(|| {
+            found.iter().fold(0.0, |sum, (a, n)| {
+                black_box(&a[..*n])
+                    .iter()
+                    .filter(|&&r| (0.0..=1.0).contains(&r))
+                    .fold(sum, |s, &r| s + r)
+            })
+        })
+    });
+    g.bench_function("roots_in/f64", |b| {
+        b.iter(|| {
+            found.iter().fold(0.0, |sum, (a, n)| {
+                peers::roots_in(black_box(&a[..*n]), 0.0, 1.0)
+                    .iter()
+                    .fold(sum, |s, &r| s + r)
+            })
+        })
+    });
+    g.finish();
+}
+
 fn benches(c: &mut Criterion) {
+    bench_fair(c);
     bench_type::<f64>(c);
     let cubics = unit_cubics::<f64>();
     bench_f64_peers(c, "cubic_all_roots_in_unit", &cubics, 0.0, 1.0);

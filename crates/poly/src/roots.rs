@@ -47,6 +47,39 @@ impl<T: Real> Roots<T> {
         roots
     }
 
+    /// The first `len` of `values` (`len <= 3`; the rest is ignored), sorted by a three-element
+    /// min/max network and with repeated values kept once: what a caller of a whole-line
+    /// solver that returns its roots unordered needs to meet this type's contract, with no
+    /// branch on the data. NaN values are the caller's to filter first.
+    ///
+    /// ```
+    /// use nlrt_poly::Roots;
+    /// let r = Roots::from_unsorted([0.75f64, 0.25, 0.75], 3);
+    /// assert_eq!(r.as_slice(), &[0.25, 0.75]);
+    /// assert_eq!(Roots::from_unsorted([0.5f32, 9.0, 9.0], 1).as_slice(), &[0.5]);
+    /// ```
+    ///
+    /// # Panics
+    /// If `len > 3`.
+    #[must_use]
+    #[inline(always)]
+    pub fn from_unsorted(values: [T; 3], len: usize) -> Self {
+        assert!(len <= 3, "a cubic has at most three roots");
+        // Unused slots become +inf, which the network moves behind the `len` values (a value
+        // of +inf itself sorts beside them, the same).
+        let v: [T; 3] = core::array::from_fn(|i| if i < len { values[i] } else { T::INFINITY });
+        let (a, b) = (v[0].min(v[1]), v[0].max(v[1]));
+        let (b, c) = (b.min(v[2]), b.max(v[2]));
+        let (a, b) = (a.min(b), a.max(b));
+        // Sorted: a repeat sits beside its twin. Keep each value's first copy.
+        let repeat_b = usize::from(len >= 2 && b == a);
+        let repeat_c = usize::from(len >= 3 && c == b);
+        Self {
+            values: [a, if repeat_b == 1 { c } else { b }, c],
+            len: (len - repeat_b - repeat_c) as u8,
+        }
+    }
+
     /// Three roots already in increasing order.
     #[must_use]
     #[inline(always)]
@@ -134,5 +167,46 @@ impl<T: Real> Deref for Roots<T> {
 impl<T: Real> core::fmt::Debug for Roots<T> {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         f.debug_list().entries(self.as_slice()).finish()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Roots;
+    extern crate std;
+
+    /// `from_unsorted` agrees with sorting and removing repeats by hand on every ordering of
+    /// every pattern of repeats among three values, for every length.
+    #[test]
+    fn from_unsorted_sorts_and_keeps_each_value_once() {
+        let patterns: [[f64; 3]; 5] = [
+            [0.1, 0.2, 0.3],
+            [0.1, 0.1, 0.3],
+            [0.1, 0.3, 0.3],
+            [0.2, 0.2, 0.2],
+            [-0.0, 0.5, f64::INFINITY],
+        ];
+        let orders = [
+            [0, 1, 2],
+            [0, 2, 1],
+            [1, 0, 2],
+            [1, 2, 0],
+            [2, 0, 1],
+            [2, 1, 0],
+        ];
+        for pattern in patterns {
+            for order in orders {
+                let values = order.map(|i| pattern[i]);
+                for len in 0..=3 {
+                    let mut expected: std::vec::Vec<f64> = values[..len].to_vec();
+                    expected.sort_by(f64::total_cmp);
+                    expected.dedup();
+                    let got = Roots::from_unsorted(values, len);
+                    assert_eq!(got.as_slice(), &expected[..], "{values:?} len {len}");
+                    let narrow = Roots::from_unsorted(values.map(|v| v as f32), len);
+                    assert_eq!(narrow.len(), expected.len(), "{values:?} len {len}");
+                }
+            }
+        }
     }
 }
