@@ -322,11 +322,31 @@ pub fn displacement_case<T: Real>(
     data: &[u8],
 ) -> Result<(nlrt_accel::DisplacedSurface<T>, nlrt_shellmap::Ray<T>), String> {
     use nlrt_accel::DisplacedSurface;
+    let (mesh, field, tiling, ray) = displacement_parts::<T>(data)?;
+    let surface = DisplacedSurface::new(mesh, field, T::ONE, tiling).map_err(|e| e.to_string())?;
+    Ok((surface, ray))
+}
+
+/// What [`displacement_case`] builds its surface from: the base mesh, the height map, the
+/// tiling and the ray (a test may build the surface otherwise, with another tiling).
+///
+/// # Errors
+/// The bytes hold no valid base triangle and ray.
+pub fn displacement_parts<T: Real>(
+    data: &[u8],
+) -> Result<
+    (
+        nlrt_accel::BaseMesh<T>,
+        nlrt_accel::HeightField,
+        T,
+        nlrt_shellmap::Ray<T>,
+    ),
+    String,
+> {
     let (field, tiling, rest) = map_of::<T>(data);
     let x = decode::<T, 30>(rest).coeffs;
     let (mesh, ray) = base_and_ray(&x).ok_or("no valid base triangle and ray")?;
-    let surface = DisplacedSurface::new(mesh, field, T::ONE, tiling).map_err(|e| e.to_string())?;
-    Ok((surface, ray))
+    Ok((mesh, field, tiling, ray))
 }
 
 /// The displacement traversal target: a small height map (side 2 to 16, any samples, either

@@ -19,7 +19,7 @@ use crate::pose::{PoseUpdate, TlasUpdate};
 use crate::precision::{PrismSearch, Search};
 use crate::seam::{EDGE_VERTICES, NO_SEAM, SeamRule, Seams, edge_parameter};
 use crate::stats::TraversalStats;
-use crate::tlas::{MAX_TEXEL_COORDINATE, PrismTlas, RootNodes, SetupError};
+use crate::tlas::{MAX_TEXEL_COORDINATE, MAX_TEXEL_RANGE, PrismTlas, RootNodes, SetupError};
 
 /// Why a displaced surface could not be built.
 #[derive(Clone, Debug, PartialEq)]
@@ -40,6 +40,14 @@ pub enum DisplacementError {
         /// The triangle.
         triangle: usize,
     },
+    /// A triangle spans more than [`MAX_TEXEL_RANGE`] texels along u or v (after tiling):
+    /// subdivide the base mesh.
+    TexelRangeTooLarge {
+        /// The triangle.
+        triangle: usize,
+        /// Its extent in texels along u and v.
+        range: [f64; 2],
+    },
 }
 
 impl fmt::Display for DisplacementError {
@@ -54,6 +62,11 @@ impl fmt::Display for DisplacementError {
             Self::WorldOutOfRange { triangle } => write!(
                 f,
                 "triangle {triangle}: a position, or a normal times the height scale, has a coordinate beyond the largest this precision traces (2^46 in f32, 2^494 in f64: see max_world_coordinate)"
+            ),
+            Self::TexelRangeTooLarge { triangle, range } => write!(
+                f,
+                "triangle {triangle} spans {} x {} texels (u x v, after tiling); at most {MAX_TEXEL_RANGE} per axis are traced: subdivide the base mesh",
+                range[0], range[1]
             ),
         }
     }
@@ -184,6 +197,9 @@ impl<T: Real> DisplacedSurface<T> {
             SetupError::UvOutOfRange(triangle) => DisplacementError::UvOutOfRange { triangle },
             SetupError::WorldOutOfRange(triangle) => {
                 DisplacementError::WorldOutOfRange { triangle }
+            }
+            SetupError::RangeTooLarge(triangle, range) => {
+                DisplacementError::TexelRangeTooLarge { triangle, range }
             }
         })?;
         Ok(Self {
@@ -1268,6 +1284,33 @@ mod tests {
         let heights = random_heights(side, 0x2545_f491_4f6c_dd1d_u64);
         let field = HeightField::from_unit_heights(side, &heights, Wrap::Clamp).unwrap();
         (mesh, field)
+    }
+
+    /// A base triangle may span [`MAX_TEXEL_RANGE`] texels per axis and no more: one more
+    /// texel of tiling and the set-up names the triangle and its range.
+    #[test]
+    fn a_triangle_wider_than_the_texel_range_limit_is_refused() {
+        let square = |uv_side: f64| {
+            let p = vec![DVec3::ZERO, DVec3::X, DVec3::new(1.0, 1.0, 0.0), DVec3::Y];
+            let uv = p
+                .iter()
+                .map(|p| DVec2::new(p.x, 0.5 * p.y) * uv_side)
+                .collect();
+            BaseMesh::new(p, vec![DVec3::Z; 4], uv, vec![[0, 1, 2], [0, 2, 3]]).unwrap()
+        };
+        let field = HeightField::new(4, vec![0; 16], Wrap::Repeat).unwrap();
+        // 4 texels per unit of uv: a uv side of 2^14 spans exactly 2^16 texels along u.
+        let limit = MAX_TEXEL_RANGE / 4.0;
+        assert!(DisplacedSurface::<f64>::new(square(limit), field.clone(), 0.1, 1.0).is_ok());
+        let wide = limit + 0.25;
+        match DisplacedSurface::<f64>::new(square(wide), field, 0.1, 1.0) {
+            Err(e @ DisplacementError::TexelRangeTooLarge { triangle: 0, range }) => {
+                assert_eq!(range, [4.0 * wide, 2.0 * wide]);
+                let message = alloc::format!("{e}");
+                assert!(message.contains("65537 x 32768.5") && message.contains("subdivide"));
+            }
+            other => panic!("{other:?}"),
+        }
     }
 
     /// Seam walls: the accelerated walk and testing every texel find the same nearest hits

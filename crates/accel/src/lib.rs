@@ -66,7 +66,7 @@ pub use pose::{PoseUpdate, TlasUpdate};
 pub use seam::{EDGE_VERTICES, NO_SEAM, SeamEdge, SeamRule, SeamSide, Seams, edge_parameter};
 pub use shell::{ShellError, ShellHit, ShellObject, ShellSurface};
 pub use stats::TraversalStats;
-pub use tlas::{MAX_TEXEL_COORDINATE, RootNodes};
+pub use tlas::{MAX_TEXEL_COORDINATE, MAX_TEXEL_RANGE, RootNodes};
 
 /// The README's examples, run by `cargo test --doc`.
 #[cfg(doctest)]

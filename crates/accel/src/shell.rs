@@ -20,7 +20,7 @@ use crate::pose::{PoseUpdate, TlasUpdate};
 use crate::precision::{PrismSearch, Search};
 use crate::stack::SpillStack;
 use crate::stats::TraversalStats;
-use crate::tlas::{MAX_TEXEL_COORDINATE, PrismTlas, RootNodes, SetupError};
+use crate::tlas::{MAX_TEXEL_COORDINATE, MAX_TEXEL_RANGE, PrismTlas, RootNodes, SetupError};
 
 /// Why a shell object or surface was rejected.
 #[derive(Clone, Debug, PartialEq)]
@@ -47,6 +47,14 @@ pub enum ShellError {
         /// The base triangle.
         triangle: usize,
     },
+    /// A base triangle spans more than [`MAX_TEXEL_RANGE`] tiles along u or v (after
+    /// tiling): subdivide the base mesh.
+    TileRangeTooLarge {
+        /// The base triangle.
+        triangle: usize,
+        /// Its extent in tiles along u and v.
+        range: [f64; 2],
+    },
 }
 
 impl fmt::Display for ShellError {
@@ -66,6 +74,11 @@ impl fmt::Display for ShellError {
             Self::WorldOutOfRange { triangle } => write!(
                 f,
                 "base triangle {triangle}: a position, or a normal times the height scale, has a coordinate beyond the largest this precision traces (2^46 in f32, 2^494 in f64: see max_world_coordinate)"
+            ),
+            Self::TileRangeTooLarge { triangle, range } => write!(
+                f,
+                "base triangle {triangle} spans {} x {} tiles (u x v, after tiling); at most {MAX_TEXEL_RANGE} per axis are traced: subdivide the base mesh",
+                range[0], range[1]
             ),
         }
     }
@@ -205,6 +218,9 @@ impl<T: Real> ShellSurface<T> {
             SetupError::Tiling(v) => ShellError::BadTiling(v),
             SetupError::UvOutOfRange(triangle) => ShellError::UvOutOfRange { triangle },
             SetupError::WorldOutOfRange(triangle) => ShellError::WorldOutOfRange { triangle },
+            SetupError::RangeTooLarge(triangle, range) => {
+                ShellError::TileRangeTooLarge { triangle, range }
+            }
         })?;
         Ok(Self { prisms, object })
     }

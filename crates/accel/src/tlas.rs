@@ -14,6 +14,13 @@ use crate::stats::TraversalStats;
 /// texel corner exactly representable in `f32` (24-bit significand) with room to spare.
 pub const MAX_TEXEL_COORDINATE: f64 = (1u64 << 22) as f64;
 
+/// The largest texel (or tile) range a base triangle may span on either axis, `2^16`: a
+/// 16,384^2 map tiled four times over one quad, and every built-in scene, fit (the largest
+/// spans 4,097). A ray's work in a prism is linear in the texels its curve crosses, so a
+/// wider triangle lets one grazing ray cost seconds (fuzz/slow, docs/testing.md); such a
+/// triangle is refused at set-up and the base mesh is to be subdivided instead.
+pub const MAX_TEXEL_RANGE: f64 = (1u64 << 16) as f64;
+
 /// Where a base triangle's traversal starts: the smallest pyramid level at which the
 /// triangle's uv box spans at most 2 x 2 nodes, and those nodes (sec. 5.4, root selection).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -70,6 +77,9 @@ pub(crate) enum SetupError {
     Tiling(f64),
     /// A triangle's cells reach beyond [`MAX_TEXEL_COORDINATE`].
     UvOutOfRange(usize),
+    /// A triangle spans more than [`MAX_TEXEL_RANGE`] cells along u or v: the triangle and
+    /// its extent in cells on both axes.
+    RangeTooLarge(usize, [f64; 2]),
     /// A triangle's prism (positions, normals times the height scale) reaches beyond
     /// [`max_world_coordinate`].
     WorldOutOfRange(usize),
@@ -144,6 +154,10 @@ impl<T: Real> PrismTlas<T> {
                 .max(hi[1].abs());
             if !(extent < MAX_TEXEL_COORDINATE) {
                 return Err(SetupError::UvOutOfRange(i));
+            }
+            let range = [hi[0] - lo[0], hi[1] - lo[1]];
+            if range.iter().any(|&r| r > MAX_TEXEL_RANGE) {
+                return Err(SetupError::RangeTooLarge(i, range));
             }
             roots.push(root_nodes(lo, hi));
         }

@@ -413,8 +413,8 @@ fn render_with(dir: &Path, extra: &[&str]) -> (Option<i32>, String) {
 }
 
 /// Texture coordinates the tracers cannot use (NaN; beyond 2^22 texels once tiled and scaled
-/// by the map's side), whether from the OBJ or from the tiling, are one message naming the
-/// scene file and the limit, not a panic.
+/// by the map's side; a base triangle spanning more than 2^16 texels), whether from the OBJ or
+/// from the tiling, are one message naming the scene file and the limit, not a panic.
 #[test]
 fn unusable_texture_coordinates_and_tilings_are_rejected() {
     let dir = scratch("uv-nan");
@@ -426,6 +426,11 @@ fn unusable_texture_coordinates_and_tilings_are_rejected() {
     let dir = scratch("tiling-huge");
     edit(&dir, "bumps.toml", "tiling = 2.0", "tiling = 1e6");
     expect_error(&dir, &["bumps.toml", "tiling", "2^22 texels"]);
+    // Within 2^22 but wider than MAX_TEXEL_RANGE (2^16) texels per axis: a 64^2 map tiled
+    // 2048 times puts 131,072 texels under the quad's triangles.
+    let dir = scratch("tiling-wide");
+    edit(&dir, "bumps.toml", "tiling = 2.0", "tiling = 2048.0");
+    expect_error(&dir, &["bumps.toml", "131072 x 131072 texels", "subdivide"]);
 }
 
 /// A height scale finite in f64 but not in f32 is an error naming the value and the
