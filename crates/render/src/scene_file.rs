@@ -381,6 +381,62 @@ fn load_motion(
     }
 }
 
+/// Checks every index of the OBJ's faces and lines (`f`, `l`) before the bytes go to `tobj`,
+/// which turns an index beyond the elements defined into an arithmetic overflow (a panic in
+/// debug builds, a wrapped index in release: `f 1/1 4/4 3/-3` with two `vt`): each index must
+/// be an integer other than 0, a positive one at most the number of elements of its kind in
+/// the file, a negative (relative) one at most the number defined before its line.
+/// Lines are read as `tobj` reads them (split at `\n`, keyword the first word); a line that
+/// is not UTF-8 is left to `tobj`, which refuses the file.
+fn check_face_indices(bytes: &[u8]) -> Result<(), String> {
+    const KINDS: [&str; 3] = ["vertex", "texture coordinate (vt)", "normal (vn)"];
+    let lines = || bytes.split(|&b| b == b'\n').map(core::str::from_utf8);
+    let count = |keyword: &str| {
+        lines()
+            .filter(|l| l.is_ok_and(|l| l.split_whitespace().next() == Some(keyword)))
+            .count()
+    };
+    let total = [count("v"), count("vt"), count("vn")];
+    let mut defined = [0usize; 3];
+    for (number, line) in lines().enumerate() {
+        let Ok(line) = line else { continue };
+        let mut words = line.split_whitespace();
+        match words.next() {
+            Some("v") => defined[0] += 1,
+            Some("vt") => defined[1] += 1,
+            Some("vn") => defined[2] += 1,
+            Some("f" | "l") => {
+                for word in words {
+                    for (kind, part) in word.split('/').take(3).enumerate() {
+                        if part.is_empty() {
+                            continue;
+                        }
+                        // What tobj does not parse as an index it refuses itself.
+                        let Ok(index) = part.parse::<i64>() else {
+                            continue;
+                        };
+                        let limit = if index < 0 {
+                            defined[kind]
+                        } else {
+                            total[kind]
+                        };
+                        if index == 0 || index.unsigned_abs() > limit as u64 {
+                            return Err(format!(
+                                "line {}: {} index {index} is out of range ({limit} defined{}; indices start at 1, negative ones count back from the last defined)",
+                                number + 1,
+                                KINDS[kind],
+                                if index < 0 { " before this line" } else { "" },
+                            ));
+                        }
+                    }
+                }
+            }
+            _ => {}
+        }
+    }
+    Ok(())
+}
+
 /// An OBJ as one mesh (all models merged). With `base`, texture coordinates are required and
 /// normals computed (area-weighted) when absent.
 fn load_obj(path: &Path, source: &Source<'_>, base: bool) -> Result<ObjData, String> {
@@ -390,6 +446,7 @@ fn load_obj(path: &Path, source: &Source<'_>, base: bool) -> Result<ObjData, Str
         ..Default::default()
     };
     let bytes = (source.read)(path)?;
+    check_face_indices(&bytes).map_err(|e| format!("{}: {e}", path.display()))?;
     // Material libraries are not read: the scene file gives the material.
     let (models, _) =
         tobj::load_obj_buf(&mut bytes.as_slice(), &options, |_| Ok(Default::default()))

@@ -433,6 +433,31 @@ fn unusable_texture_coordinates_and_tilings_are_rejected() {
     expect_error(&dir, &["bumps.toml", "131072 x 131072 texels", "subdivide"]);
 }
 
+/// Face indices beyond the elements an OBJ defines (relative ones counting back past the
+/// first, absolute ones past the last, and 0) are one message naming the file, the line and
+/// the index: checked before the OBJ reader, whose index arithmetic overflows on them.
+#[test]
+fn obj_face_indices_out_of_range_are_rejected() {
+    for (name, face, needle) in [
+        (
+            "relative-vt",
+            "f 1/1 4/4 3/-9",
+            "texture coordinate (vt) index -9",
+        ),
+        ("relative-v", "f 1/1 4/4 -5/3", "vertex index -5"),
+        (
+            "absolute-vt",
+            "f 1/1 4/4 3/9223372036854775807",
+            "index 9223372036854775807",
+        ),
+        ("zero", "f 1/1 4/4 0/3", "vertex index 0"),
+    ] {
+        let dir = scratch(&format!("obj-index-{name}"));
+        edit(&dir, "quad.obj", "f 1/1 4/4 3/3", face);
+        expect_error(&dir, &["quad.obj", "line 11", needle, "out of range"]);
+    }
+}
+
 /// A height scale finite in f64 but not in f32 is an error naming the value and the
 /// precision when f32 is asked for, and renders in f64. One that makes the prisms reach beyond
 /// the largest world coordinate a precision traces (`max_world_coordinate`: 2^46 in f32,
