@@ -14,10 +14,11 @@
 //! ```
 //!
 //! A row holds the seconds and ray counts the rates come from; the error fields are `null`
-//! where the table shows `-`.
+//! where the table shows `-`. With `--rounds N` (N >= 2) a row's `rounds` holds every round's
+//! replays and the ratios to the scene's first method (per round, median, smallest, largest).
 
 use crate::ray_stream::Replay;
-use crate::report::{ErrorStats, MethodRun, ReportOptions, TableRow};
+use crate::report::{ErrorStats, MethodRun, ReportOptions, RoundRatios, TableRow, round_ratios};
 use serde::Serialize;
 
 /// The commit the binary was built from (`build.rs`; `unknown` outside a git checkout).
@@ -90,6 +91,45 @@ pub struct StreamFields {
     pub all_one_thread: ReplayFields,
 }
 
+/// Ratios of a method's rates to another's over the rounds ([`RoundRatios`]).
+#[derive(Clone, Debug, Serialize)]
+pub struct RatioFields {
+    /// Per round.
+    pub per_round: Vec<f64>,
+    /// Their median.
+    pub median: f64,
+    /// The smallest.
+    pub min: f64,
+    /// The largest.
+    pub max: f64,
+}
+
+impl RatioFields {
+    fn new(r: RoundRatios) -> Self {
+        Self {
+            per_round: r.per_round,
+            median: r.median,
+            min: r.min,
+            max: r.max,
+        }
+    }
+}
+
+/// A method's interleaved rounds of the scene's stream ([`crate::report::RoundTimes`]).
+#[derive(Clone, Debug, Serialize)]
+pub struct RoundsFields {
+    /// The method the ratios are against (the scene's first; its slug).
+    pub against: String,
+    /// Every ray, all threads, per round.
+    pub all: Vec<ReplayFields>,
+    /// Every ray, one thread, per round.
+    pub all_one_thread: Vec<ReplayFields>,
+    /// All threads: this method's rate over the first method's.
+    pub ratio_all: RatioFields,
+    /// One thread: the same.
+    pub ratio_all_one_thread: RatioFields,
+}
+
 /// One scene and method: a row of the bench table.
 #[derive(Clone, Debug, Serialize)]
 pub struct BenchRow {
@@ -117,6 +157,8 @@ pub struct BenchRow {
     pub one_thread_seconds: Option<f64>,
     /// The scene's recorded ray stream replayed into this method (`null` without it).
     pub stream: Option<StreamFields>,
+    /// The interleaved rounds (`--rounds N`, N >= 2; `null` otherwise).
+    pub rounds: Option<RoundsFields>,
     /// Against the f64 pre-tessellated reference (`null` when it did not run).
     pub vs_reference: Option<ErrorFields>,
     /// Against the method's f64 partner (`null` when it did not run).
@@ -130,10 +172,29 @@ impl BenchRow {
     pub fn new(
         scene: &str,
         run: &MethodRun,
+        first: Option<&MethodRun>,
         vs_reference: Option<ErrorStats>,
         vs_f64: Option<ErrorStats>,
     ) -> Self {
         let m = run.method;
+        let rounds = first.and_then(|first| {
+            let (all, one) = round_ratios(run, first)?;
+            Some(RoundsFields {
+                against: first.method.slug().to_string(),
+                all: run
+                    .rounds
+                    .iter()
+                    .map(|r| ReplayFields::new(&r.all))
+                    .collect(),
+                all_one_thread: run
+                    .rounds
+                    .iter()
+                    .map(|r| ReplayFields::new(&r.all_one_thread))
+                    .collect(),
+                ratio_all: RatioFields::new(all),
+                ratio_all_one_thread: RatioFields::new(one),
+            })
+        });
         Self {
             scene: scene.to_string(),
             method: m.slug().to_string(),
@@ -151,6 +212,7 @@ impl BenchRow {
                 all: ReplayFields::new(&st.all),
                 all_one_thread: ReplayFields::new(&st.all_one_thread),
             }),
+            rounds,
             vs_reference: vs_reference.map(|e| ErrorFields::new(m.reference().slug(), &e)),
             vs_f64: vs_f64.map(|e| ErrorFields::new(m.f64_partner().slug(), &e)),
         }
@@ -239,7 +301,18 @@ pub fn utc_timestamp(unix_seconds: u64) -> String {
 pub fn to_json(opts: &ReportOptions, rows: &[TableRow]) -> String {
     let rows: Vec<BenchRow> = rows
         .iter()
-        .map(|r| BenchRow::new(&r.scene, &r.run, r.vs_reference, r.vs_f64))
+        .map(|r| {
+            let first = rows
+                .iter()
+                .find(|f| f.scene == r.scene && !f.run.rounds.is_empty());
+            BenchRow::new(
+                &r.scene,
+                &r.run,
+                first.map(|f| &f.run),
+                r.vs_reference,
+                r.vs_f64,
+            )
+        })
         .collect();
     let now = std::time::SystemTime::now()
         .duration_since(std::time::UNIX_EPOCH)

@@ -207,6 +207,13 @@ enum Command {
         /// features and the commit (format `nlrt-bench/1`, described in `docs/measurements.md`).
         #[arg(long, value_name = "FILE")]
         json: Option<PathBuf>,
+        /// Replay each scene's ray stream in this many interleaved rounds (every method in turn
+        /// per round, all threads then one thread): the stream's "all" columns become the
+        /// rounds' medians, and a table gives each round's ratio to the scene's first method
+        /// with their median and spread (in the JSON too). Keeps every method's acceleration
+        /// data alive at once. 1: one replay per method, no rounds.
+        #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=1000))]
+        rounds: u32,
     },
     /// The full report: every scene and method, images, differences, and the solver table.
     Report {
@@ -452,6 +459,7 @@ fn report_command(
         scaling: false,
         ray_stream: false,
         seam_rule,
+        rounds: 1,
     };
     let start = std::time::Instant::now();
     let scenes_md = match report::run(&opts) {
@@ -708,6 +716,7 @@ fn main() -> ExitCode {
                 scaling: false,
                 ray_stream: false,
                 seam_rule,
+                rounds: 1,
             };
             let seams = built.describe_seams();
             if !seams.is_empty() {
@@ -744,7 +753,14 @@ fn main() -> ExitCode {
             methods,
             no_ray_stream,
             json,
+            rounds,
         } => {
+            if rounds > 1 && no_ray_stream {
+                return fail(
+                    "bench",
+                    "--rounds interleaves the ray stream's replays; it cannot go with --no-ray-stream",
+                );
+            }
             let scenes = if scenes.is_empty() {
                 SCENE_NAMES.iter().map(|s| s.to_string()).collect()
             } else {
@@ -777,6 +793,7 @@ fn main() -> ExitCode {
                 scaling: true,
                 ray_stream: !no_ray_stream,
                 seam_rule,
+                rounds: rounds as usize,
             };
             match report::run_with_rows(&opts) {
                 Ok((md, rows)) => {

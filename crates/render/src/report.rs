@@ -80,6 +80,65 @@ pub struct MethodRun {
     pub one_thread_seconds: Option<f64>,
     /// The scene's recorded ray stream replayed into this method (when measured).
     pub stream: Option<StreamTimes>,
+    /// The interleaved rounds of the stream's replay (`--rounds N`, N >= 2; empty otherwise):
+    /// in each round every method traced the stream in turn.
+    pub rounds: Vec<RoundTimes>,
+}
+
+/// One round of the interleaved replays ([`ReportOptions::rounds`]).
+#[derive(Clone, Copy, Debug)]
+pub struct RoundTimes {
+    /// Every ray, all threads.
+    pub all: Replay,
+    /// Every ray, one thread.
+    pub all_one_thread: Replay,
+}
+
+/// The ratios of one method's rates to another's, round by round, with their median and
+/// spread.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RoundRatios {
+    /// This method's rate over the other's, per round.
+    pub per_round: Vec<f64>,
+    /// Their median (the mean of the middle two for an even count).
+    pub median: f64,
+    /// The smallest.
+    pub min: f64,
+    /// The largest.
+    pub max: f64,
+}
+
+impl RoundRatios {
+    /// `rate(mine[i]) / rate(theirs[i])` for each round both have; `None` without rounds.
+    #[must_use]
+    pub fn new(mine: &[Replay], theirs: &[Replay]) -> Option<Self> {
+        let per_round: Vec<f64> = mine
+            .iter()
+            .zip(theirs)
+            .map(|(a, b)| a.mrays() / b.mrays())
+            .collect();
+        let mut sorted = per_round.clone();
+        sorted.sort_by(f64::total_cmp);
+        let n = sorted.len();
+        let median = match n {
+            0 => return None,
+            _ if n % 2 == 1 => sorted[n / 2],
+            _ => 0.5 * (sorted[n / 2 - 1] + sorted[n / 2]),
+        };
+        Some(Self {
+            median,
+            min: sorted[0],
+            max: sorted[n - 1],
+            per_round,
+        })
+    }
+}
+
+/// The replay of median duration among `replays` (the lower middle one for an even count).
+fn median_replay(replays: impl Iterator<Item = Replay>) -> Option<Replay> {
+    let mut all: Vec<Replay> = replays.collect();
+    all.sort_by(|a, b| a.seconds.total_cmp(&b.seconds));
+    all.get(all.len().saturating_sub(1) / 2).copied()
 }
 
 /// One method's replays of a scene's recorded ray stream ([`crate::ray_stream`]).
@@ -128,6 +187,12 @@ pub struct ReportOptions {
     pub ray_stream: bool,
     /// How the scenes' uv and normal seams are treated (`--no-seam-fix`: left open).
     pub seam_rule: nlrt_accel::SeamRule,
+    /// With the ray stream: how many interleaved rounds of replays (every method in turn per
+    /// round, all threads then one thread), whose medians fill the stream's "all" columns and
+    /// whose per-round ratios to the scene's first method are reported. 1: one replay per
+    /// method right after its render, no rounds. Every method's acceleration data stays alive
+    /// until the scene's rounds are done.
+    pub rounds: usize,
 }
 
 /// A progress bar over image rows on a terminal (indicatif); nothing when stderr is not one.
@@ -185,7 +250,20 @@ fn run_scene_with_stream(
         });
     // One single-thread pool for every 1-thread measurement of the scene (renders, replays).
     let one_thread = rayon::ThreadPoolBuilder::new().num_threads(1).build().ok();
-    let runs = opts
+    let interleaved = opts.rounds >= 2 && recorded.is_some();
+    let no_replay = Replay {
+        rays: 0,
+        hits: 0,
+        seconds: f64::NAN,
+    };
+    let replay_one_thread = |tracer: &dyn Tracer, stream: &RayStream| {
+        one_thread.as_ref().map_or(no_replay, |pool| {
+            pool.install(|| replay(tracer, stream, None))
+        })
+    };
+    // The tracers kept for the interleaved rounds.
+    let mut kept: Vec<Box<dyn Tracer>> = Vec::new();
+    let mut runs: Vec<MethodRun> = opts
         .methods
         .iter()
         .filter(|m| m.supports(scene))
@@ -204,32 +282,135 @@ fn run_scene_with_stream(
                     pool.install(|| render(scene, tracer.as_ref(), &opts.render, &|_| {}).seconds)
                 })
             });
+            // With rounds, "all" and "all, 1 thread" come from the rounds below.
             let stream = recorded.as_ref().map(|(_, stream)| {
                 let tracer = tracer.as_ref();
                 StreamTimes {
-                    all: replay(tracer, stream, None),
+                    all: if interleaved {
+                        no_replay
+                    } else {
+                        replay(tracer, stream, None)
+                    },
                     primary: replay(tracer, stream, Some(RayKind::Primary)),
-                    all_one_thread: one_thread.as_ref().map_or(
-                        Replay {
-                            rays: 0,
-                            hits: 0,
-                            seconds: f64::NAN,
-                        },
-                        |pool| pool.install(|| replay(tracer, stream, None)),
-                    ),
+                    all_one_thread: if interleaved {
+                        no_replay
+                    } else {
+                        replay_one_thread(tracer, stream)
+                    },
                 }
             });
-            MethodRun {
+            let run = MethodRun {
                 method,
                 init_seconds,
                 memory_bytes: tracer.memory_bytes(),
                 frame,
                 one_thread_seconds,
                 stream,
+                rounds: Vec::new(),
+            };
+            if interleaved {
+                kept.push(tracer);
             }
+            run
         })
         .collect();
+    if let (true, Some((_, stream))) = (interleaved, &recorded) {
+        for round in 0..opts.rounds {
+            eprintln!(
+                "  {}: round {} of {} of the stream's replays",
+                scene.name,
+                round + 1,
+                opts.rounds
+            );
+            for (run, tracer) in runs.iter_mut().zip(&kept) {
+                let all = replay(tracer.as_ref(), stream, None);
+                let all_one_thread = replay_one_thread(tracer.as_ref(), stream);
+                run.rounds.push(RoundTimes {
+                    all,
+                    all_one_thread,
+                });
+            }
+        }
+        for run in &mut runs {
+            if let Some(st) = run.stream.as_mut() {
+                st.all = median_replay(run.rounds.iter().map(|r| r.all)).unwrap_or(no_replay);
+                st.all_one_thread =
+                    median_replay(run.rounds.iter().map(|r| r.all_one_thread)).unwrap_or(no_replay);
+            }
+        }
+    }
     (runs, recorded)
+}
+
+/// A method's interleaved rounds against another's (the scene's first method): the ratios of
+/// their rates on every thread and on one thread.
+#[must_use]
+pub fn round_ratios(mine: &MethodRun, first: &MethodRun) -> Option<(RoundRatios, RoundRatios)> {
+    let all = |r: &MethodRun| r.rounds.iter().map(|t| t.all).collect::<Vec<_>>();
+    let one = |r: &MethodRun| {
+        r.rounds
+            .iter()
+            .map(|t| t.all_one_thread)
+            .collect::<Vec<_>>()
+    };
+    Some((
+        RoundRatios::new(&all(mine), &all(first))?,
+        RoundRatios::new(&one(mine), &one(first))?,
+    ))
+}
+
+/// The interleaved rounds as a Markdown section: per scene and method, the rates (medians of
+/// the rounds) and the ratios to the scene's first method, round by round, with their median
+/// and spread.
+fn rounds_table(rows: &[TableRow], threads: usize) -> String {
+    let mut md = String::new();
+    let rounds = rows.iter().map(|r| r.run.rounds.len()).max().unwrap_or(0);
+    let _ = writeln!(
+        md,
+        "\n### Interleaved rounds of the stream\n\n{rounds} rounds; in each, every method traced \
+         the stream in turn ({threads} threads, then 1 thread). Ratios are each round's rate over \
+         the scene's first method's in the same round; the median and the spread (smallest - \
+         largest) over the rounds.\n\n\
+         | scene | method | against | Mrays/s all (median) | ratio per round | ratio median (spread) | \
+         Mrays/s all, 1 thread (median) | 1-thread ratio per round | 1-thread ratio median (spread) |\n\
+         |---|---|---|---|---|---|---|---|---|"
+    );
+    let fmt_list = |v: &[f64]| {
+        v.iter()
+            .map(|x| format!("{x:.3}"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    for row in rows {
+        let Some(first) = rows
+            .iter()
+            .find(|r| r.scene == row.scene && !r.run.rounds.is_empty())
+        else {
+            continue;
+        };
+        let (Some((all, one)), Some(st)) = (round_ratios(&row.run, &first.run), row.run.stream)
+        else {
+            continue;
+        };
+        let _ = writeln!(
+            md,
+            "| {} | {} | {} | {:.3} | {} | {:.3} ({:.3} - {:.3}) | {:.3} | {} | {:.3} ({:.3} - {:.3}) |",
+            row.scene,
+            row.run.method,
+            first.run.method,
+            st.all.mrays(),
+            fmt_list(&all.per_round),
+            all.median,
+            all.min,
+            all.max,
+            st.all_one_thread.mrays(),
+            fmt_list(&one.per_round),
+            one.median,
+            one.min,
+            one.max,
+        );
+    }
+    md
 }
 
 fn mib(bytes: usize) -> f64 {
@@ -491,6 +672,9 @@ pub fn run_with_rows(opts: &ReportOptions) -> Result<(String, Vec<TableRow>), St
             let _ = writeln!(md, "- {note}");
         }
     }
+    if rows.iter().any(|r| !r.run.rounds.is_empty()) {
+        md.push_str(&rounds_table(&rows, rayon::current_num_threads()));
+    }
     if let Some(dir) = &opts.out_dir
         && !points.is_empty()
     {
@@ -534,4 +718,49 @@ pub fn run_with_rows(opts: &ReportOptions) -> Result<(String, Vec<TableRow>), St
         let _ = Path::new(dir);
     }
     Ok((md, rows))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{Replay, RoundRatios, median_replay};
+
+    fn replay(rays: u64, seconds: f64) -> Replay {
+        Replay {
+            rays,
+            hits: 0,
+            seconds,
+        }
+    }
+
+    /// Ratios per round are rate over rate; the median of an odd count is its middle value,
+    /// of an even count the mean of the middle two; the spread is the extremes.
+    #[test]
+    fn round_ratios_are_per_round_with_median_and_spread() {
+        let mine = [replay(100, 1.0), replay(100, 2.0), replay(100, 4.0)];
+        let theirs = [replay(100, 2.0), replay(100, 2.0), replay(100, 2.0)];
+        let r = RoundRatios::new(&mine, &theirs).unwrap();
+        assert_eq!(r.per_round, vec![2.0, 1.0, 0.5]);
+        assert_eq!((r.median, r.min, r.max), (1.0, 0.5, 2.0));
+        let r = RoundRatios::new(&mine[..2], &theirs[..2]).unwrap();
+        assert_eq!((r.median, r.min, r.max), (1.5, 1.0, 2.0));
+        assert_eq!(RoundRatios::new(&[], &[]), None);
+    }
+
+    /// The median replay is the one of median duration (the faster middle one of an even
+    /// count).
+    #[test]
+    fn the_median_replay_is_the_middle_duration() {
+        let rounds = [
+            replay(1, 3.0),
+            replay(2, 1.0),
+            replay(3, 2.0),
+            replay(4, 5.0),
+        ];
+        assert_eq!(median_replay(rounds.into_iter()).map(|r| r.rays), Some(3));
+        assert_eq!(
+            median_replay(rounds[..3].iter().copied()).map(|r| r.rays),
+            Some(3)
+        );
+        assert_eq!(median_replay(core::iter::empty()), None);
+    }
 }

@@ -750,6 +750,94 @@ fn bench_json_holds_every_row() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// `nlrt bench --rounds 3`: every method replays the stream once per round; the JSON holds
+/// the rounds and their ratios to the scene's first method (exactly 1 for it), whose median
+/// and spread follow from the per-round values; the stream's "all" columns are the rounds'
+/// median; the table lists the rounds. `--rounds` without the stream is an exit-2 error.
+#[test]
+fn bench_rounds_interleave_the_stream_replays() {
+    let dir = std::env::temp_dir().join(format!("nlrt-bench-rounds-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("rounds.json");
+    let args = [
+        "bench",
+        "torus",
+        "--methods",
+        "nonlinear-f32,nonlinear-f64",
+        "--no-reference",
+        "--size",
+        "16x12",
+        "--rounds",
+        "3",
+        "--json",
+        path.to_str().unwrap(),
+    ];
+    let out = nlrt(&args);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let table = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        table.contains("### Interleaved rounds of the stream"),
+        "{table}"
+    );
+    assert!(
+        table.contains("| torus | nonlinear f64 | nonlinear f32 |"),
+        "{table}"
+    );
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    let rows = json["rows"].as_array().unwrap();
+    assert_eq!(rows.len(), 2);
+    for row in rows {
+        let rounds = &row["rounds"];
+        assert_eq!(rounds["against"], "nonlinear-f32", "{row}");
+        let all = rounds["all"].as_array().unwrap();
+        assert_eq!(all.len(), 3);
+        let rates: Vec<f64> = all
+            .iter()
+            .map(|r| {
+                assert_eq!(r["rays"], row["stream"]["all"]["rays"]);
+                r["mrays_per_s"].as_f64().unwrap()
+            })
+            .collect();
+        // The stream's "all" column is one of the rounds: the median one.
+        let median_rate = row["stream"]["all"]["mrays_per_s"].as_f64().unwrap();
+        let mut sorted = rates.clone();
+        sorted.sort_by(f64::total_cmp);
+        assert_eq!(median_rate, sorted[1], "{row}");
+        let ratios: Vec<f64> = rounds["ratio_all"]["per_round"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|r| r.as_f64().unwrap())
+            .collect();
+        let first = rows[0]["rounds"]["all"].as_array().unwrap();
+        for ((ratio, rate), f) in ratios.iter().zip(&rates).zip(first) {
+            let expected = rate / f["mrays_per_s"].as_f64().unwrap();
+            assert!((ratio - expected).abs() <= 1e-12 * expected, "{row}");
+        }
+        let mut r = ratios.clone();
+        r.sort_by(f64::total_cmp);
+        assert_eq!(rounds["ratio_all"]["median"].as_f64().unwrap(), r[1]);
+        assert_eq!(rounds["ratio_all"]["min"].as_f64().unwrap(), r[0]);
+        assert_eq!(rounds["ratio_all"]["max"].as_f64().unwrap(), r[2]);
+        assert_eq!(rounds["all_one_thread"].as_array().unwrap().len(), 3);
+    }
+    for r in rows[0]["rounds"]["ratio_all"]["per_round"]
+        .as_array()
+        .unwrap()
+    {
+        assert_eq!(r.as_f64(), Some(1.0));
+    }
+    let out = nlrt(&["bench", "torus", "--rounds", "2", "--no-ray-stream"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--no-ray-stream"));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 /// A recorded ray stream holds every ray the render cast, in its kinds; replayed into the
 /// tracer that recorded it, its primary rays hit exactly where the frame has a depth, and
 /// every ray hits as often on one thread as on all.
