@@ -641,12 +641,20 @@ fn patch(n: usize, f: impl Fn(f64, f64) -> DVec3) -> Vec<[DVec3; 3]> {
 
 /// A scale (shingle): a curved plate rising from the tile's lower edge to its upper edge
 /// and overlapping the next row, like fish or reptile scales (8 x 8 quads, 128 triangles).
+/// It spans the whole tile, so that the scales close: neighbours in a row meet along the tile
+/// boundary at the height of their low sides (`h = 0.15`), and each row's high edge stands
+/// over the next row's low one. (With a margin between tiles, a view along a tile boundary
+/// looked through the gaps on the torus's near and far sides: a see-through line.)
 #[must_use]
 pub fn scale_object() -> Vec<[DVec3; 3]> {
     patch(8, |s, t| {
-        let u = 0.04 + 0.92 * s;
-        let v = 0.02 + 0.96 * t;
-        let across = (std::f64::consts::PI * s).sin();
+        let (u, v) = (s, t);
+        // sin(pi) is 1.2e-16, not 0: the two sides of a scale are at the same height exactly.
+        let across = if s == 0.0 || s == 1.0 {
+            0.0
+        } else {
+            (std::f64::consts::PI * s).sin()
+        };
         DVec3::new(u, v, (0.15 + 0.8 * t * across).min(1.0))
     })
 }
@@ -733,7 +741,11 @@ pub fn cornell_object(n: usize) -> Vec<[DVec3; 3]> {
 }
 
 /// (g) Cornell: a UV sphere of 722 base triangles (19 x 19 quads; the rows at the poles are
-/// world-degenerate there) with a Cornell-box-like object tiled 16 x 16.
+/// world-degenerate there) with a Cornell-box-like object tiled 16 x 16. Each tile holds its
+/// own box, inset by 0.05 tile from the tile's sides: the gaps between boxes are meant, and a
+/// view along a tile boundary (the default camera's centre column, along the meridians at the
+/// front and back of the sphere) looks through the gaps on both sides of the sphere to the
+/// background, as the pre-tessellated reference does.
 #[must_use]
 pub fn cornell(n: usize) -> Scene {
     let (positions, normals, uvs, triangles) = grid(19, 19, |u, v| {
@@ -1081,7 +1093,9 @@ pub fn blob_object(n: usize) -> Vec<[DVec3; 3]> {
 }
 
 /// (h) High-polygon object: a torus of 512 base triangles with a bumpy blob tiled 16 x 16
-/// (`2 n^2` triangles per instance, minus the zero-area ones at the poles).
+/// (`2 n^2` triangles per instance, minus the zero-area ones at the poles). The blobs are
+/// separate objects with gaps between them, meant: the default camera's centre column, in the
+/// plane of a tile boundary at the torus's front and back, sees the background through them.
 #[must_use]
 pub fn highpoly(n: usize) -> Scene {
     shell_torus(
