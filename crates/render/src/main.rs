@@ -150,9 +150,27 @@ struct RenderArgs {
     /// Map sizes of the built-in scenes.
     #[arg(long, value_enum, default_value = "small")]
     scene_size: SceneSize,
+    /// Every height map of the built-in scenes at this side (a power of two, 512 to 16384),
+    /// the rest at the paper's sizes: a scale sweep, e.g. `bench mountain --map-side 8192`.
+    /// Overrides --scene-size.
+    #[arg(long, value_parser = parse_map_side)]
+    map_side: Option<Size>,
+}
+
+/// `--map-side N`: [`Size::map_side`].
+fn parse_map_side(text: &str) -> Result<Size, String> {
+    let side: usize = text
+        .parse()
+        .map_err(|_| format!("'{text}' is not a whole number"))?;
+    Size::map_side(side)
 }
 
 impl RenderArgs {
+    /// The scene size: `--map-side` where given, else `--scene-size`.
+    fn scene_size(&self) -> Size {
+        self.map_side.unwrap_or(self.scene_size.into())
+    }
+
     fn options(&self) -> RenderOptions {
         RenderOptions {
             width: self.size.0,
@@ -452,7 +470,7 @@ fn report_command(
     }
     let opts = ReportOptions {
         scenes: SCENE_NAMES.iter().map(|s| s.to_string()).collect(),
-        size: args.scene_size.into(),
+        size: args.scene_size(),
         render: args.options(),
         methods: Method::ALL.to_vec(),
         out_dir: Some(output.clone()),
@@ -471,7 +489,7 @@ fn report_command(
         "| scene | method | rays | decided | leaks | rate | 95% interval | ghost hits (of hits judged) | grazing | too far | hit distance vs oracle: median / p99 / max rel. error (hits compared, unverified) |\n|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for name in scenes::WATERTIGHT_SCENES {
-        let Some(scene) = scenes::builtin(name, args.scene_size.into()) else {
+        let Some(scene) = scenes::builtin(name, args.scene_size()) else {
             continue;
         };
         let judged_hits = watertight::JudgedHits::Spaced {
@@ -519,7 +537,7 @@ fn report_command(
     };
     eprintln!("editing...");
     let edit_md = match edit::run(&edit::EditOptions {
-        size: args.scene_size.into(),
+        size: args.scene_size(),
         ..edit::EditOptions::default()
     }) {
         Ok(r) => edit::markdown(&r),
@@ -553,7 +571,7 @@ fn report_command(
 /// The report's seam section: `seam-cube` rendered by nonlinear tracing in f32 with and
 /// without the seam rule, side by side (`seam-cube-seams.png`), crack pixels in red.
 fn seam_section(output: &std::path::Path, args: &RenderArgs) -> Result<String, String> {
-    let Some(scene) = scenes::builtin("seam-cube", args.scene_size.into()) else {
+    let Some(scene) = scenes::builtin("seam-cube", args.scene_size()) else {
         return Err("no seam-cube scene".into());
     };
     let opts = args.options();
@@ -589,7 +607,7 @@ fn animate_command(
 ) -> ExitCode {
     use nlrt_render::animate::{self, AnimateOptions};
     use nlrt_render::animation::Motion;
-    let mut built = match resolve_scene(scene, args.scene_size.into(), seam_rule) {
+    let mut built = match resolve_scene(scene, args.scene_size(), seam_rule) {
         Ok(s) => s,
         Err(e) => return fail("animate", e),
     };
@@ -651,6 +669,7 @@ fn main() -> ExitCode {
             spp: 1,
             bounces: 1,
             scene_size: SceneSize::Small,
+            map_side: None,
         };
         return report_command(
             PathBuf::from("nlrt-report"),
@@ -668,7 +687,7 @@ fn main() -> ExitCode {
             output,
             aov,
         } => {
-            let built = match resolve_scene(&scene, args.scene_size.into(), seam_rule) {
+            let built = match resolve_scene(&scene, args.scene_size(), seam_rule) {
                 Ok(s) => s,
                 Err(e) => return fail("render", e),
             };
@@ -709,7 +728,7 @@ fn main() -> ExitCode {
             }
             let opts = ReportOptions {
                 scenes: vec![scene.clone()],
-                size: args.scene_size.into(),
+                size: args.scene_size(),
                 render: args.options(),
                 methods: vec![method],
                 out_dir: None,
@@ -786,7 +805,7 @@ fn main() -> ExitCode {
                 .collect();
             let opts = ReportOptions {
                 scenes,
-                size: args.scene_size.into(),
+                size: args.scene_size(),
                 render: args.options(),
                 methods,
                 out_dir: None,

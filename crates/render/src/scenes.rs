@@ -141,29 +141,72 @@ pub fn is_builtin(name: &str) -> bool {
     SCENE_NAMES.contains(&name) || VARIANT_NAMES.contains(&name)
 }
 
-/// Sizes of a built-in scene: the paper's, or reduced for quick runs.
+/// Sizes of a built-in scene: the paper's, or reduced for quick runs, or the paper's with
+/// every height map of a chosen side (a scale sweep).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Size {
     /// The paper's sizes (4096^2 maps; the fur's 256^2 spikes tiled 8 x 8).
     Paper,
     /// Maps a quarter of the side (the fur's 64^2), same meshes.
     Small,
+    /// The paper's sizes, with every height map of this side (a power of two, at least
+    /// [`MIN_MAP_SIDE`]: see [`Size::map_side`]); the same terrain or relief, sampled finer or
+    /// coarser.
+    MapSide(usize),
+}
+
+/// The smallest map side [`Size::map_side`] accepts: the fBm maps' coarsest noise period is
+/// 4 lattice cells across the map, and the finest octave of 8 needs at least one sample per
+/// cell of period `4 * 2^7 = 512`.
+pub const MIN_MAP_SIDE: usize = 512;
+
+impl Size {
+    /// [`Size::MapSide`] after checking `side`: a power of two from [`MIN_MAP_SIDE`] to the
+    /// scene files' largest map (16384).
+    ///
+    /// # Errors
+    /// A side outside that range or not a power of two, with a message saying so.
+    pub fn map_side(side: usize) -> Result<Self, String> {
+        if side.is_power_of_two() && (MIN_MAP_SIDE..=16384).contains(&side) {
+            Ok(Self::MapSide(side))
+        } else {
+            Err(format!(
+                "map side {side} must be a power of two from {MIN_MAP_SIDE} to 16384"
+            ))
+        }
+    }
+
+    /// The side to use for a map whose paper size is `paper` and small size `small`.
+    #[must_use]
+    fn pick(self, paper: usize, small: usize) -> usize {
+        match self {
+            Self::Paper => paper,
+            Self::Small => small,
+            Self::MapSide(side) => side,
+        }
+    }
+
+    /// An object resolution or other non-map size: the map side does not change it.
+    #[must_use]
+    fn detail(self, paper: usize, small: usize) -> usize {
+        if self == Self::Small { small } else { paper }
+    }
 }
 
 /// The built-in scene `name` at `size`; `None` for an unknown name.
 #[must_use]
 pub fn builtin(name: &str, size: Size) -> Option<Scene> {
-    let big = size == Size::Paper;
+    let map = |paper, small| size.pick(paper, small);
     match name {
-        "mountain" => Some(mountain(if big { 4096 } else { 1024 })),
-        "cylinder" => Some(cylinder(if big { 4096 } else { 1024 })),
-        "fur" => Some(fur(if big { 256 } else { 64 })),
-        "fur-cones" => Some(fur_cones(if big { 256 } else { 64 })),
-        "torus" => Some(torus_scene(if big { 1024 } else { 256 })),
+        "mountain" => Some(mountain(map(4096, 1024))),
+        "cylinder" => Some(cylinder(map(4096, 1024))),
+        "fur" => Some(fur(map(256, 64))),
+        "fur-cones" => Some(fur_cones(map(256, 64))),
+        "torus" => Some(torus_scene(map(1024, 256))),
         "mountain-grazing" => {
             // The watertightness view of the mountain: just above the shell's top, over the
             // map's edge, looking across it about 4 degrees down.
-            let mut m = mountain(if big { 4096 } else { 1024 });
+            let mut m = mountain(map(4096, 1024));
             m.name = "mountain-grazing";
             m.camera.eye = DVec3::new(0.0, 0.4, 0.95);
             m.camera.target = DVec3::new(0.0, 0.25, -1.0);
@@ -171,15 +214,13 @@ pub fn builtin(name: &str, size: Size) -> Option<Scene> {
         }
         "scales" => Some(scales()),
         "fig9" => Some(fig9()),
-        "fig9-displaced" => Some(fig9_displaced(if big { 1024 } else { 256 })),
-        "torus-spikes" | "torus-tilted" | "torus-twisted" => {
-            ghost_torus(name, if big { 256 } else { 64 })
-        }
-        "cornell" => Some(cornell(if big { 15 } else { 6 })),
-        "seam-cube" => Some(seam_cube(if big { 1024 } else { 256 })),
-        "seam-sphere" => Some(seam_sphere(if big { 1024 } else { 256 })),
+        "fig9-displaced" => Some(fig9_displaced(map(1024, 256))),
+        "torus-spikes" | "torus-tilted" | "torus-twisted" => ghost_torus(name, map(256, 64)),
+        "cornell" => Some(cornell(size.detail(15, 6))),
+        "seam-cube" => Some(seam_cube(map(1024, 256))),
+        "seam-sphere" => Some(seam_sphere(map(1024, 256))),
         "feathers" => Some(feathers()),
-        "highpoly" => Some(highpoly(if big { 270 } else { 32 })),
+        "highpoly" => Some(highpoly(size.detail(270, 32))),
         _ => None,
     }
 }
@@ -1223,5 +1264,34 @@ fn world_range_hint<T: nlrt_poly::Real>() -> &'static str {
         " (scale the scene down, or use --precision f64)"
     } else {
         " (scale the scene down)"
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{Content, MIN_MAP_SIDE, Size, builtin};
+
+    /// `Size::MapSide` sets every map's side and leaves the rest at the paper's sizes; sides
+    /// that are not powers of two in `[MIN_MAP_SIDE, 16384]` are refused with a message.
+    #[test]
+    fn a_map_side_sets_the_maps_and_nothing_else() {
+        let size = Size::map_side(MIN_MAP_SIDE).unwrap();
+        for name in ["mountain", "cylinder", "fur", "torus"] {
+            let scene = builtin(name, size).unwrap();
+            let Content::Displacement(field) = &scene.content else {
+                panic!("{name} is a displacement scene")
+            };
+            assert_eq!(field.side(), MIN_MAP_SIDE, "{name}");
+        }
+        let paper = builtin("cornell", Size::Paper).unwrap();
+        let swept = builtin("cornell", size).unwrap();
+        assert_eq!(swept.content.describe(), paper.content.describe());
+        for bad in [0, 256, 1000, 32768] {
+            let e = Size::map_side(bad).unwrap_err();
+            assert!(
+                e.contains(&bad.to_string()) && e.contains("power of two"),
+                "{e}"
+            );
+        }
     }
 }
