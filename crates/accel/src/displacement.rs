@@ -342,11 +342,6 @@ impl<T: Real> DisplacedSurface<T> {
         T::from_i32(i32::from(s)) / T::from_i32(i32::from(HEIGHT_ONE))
     }
 
-    #[inline]
-    fn coord(&self, i: i32) -> T {
-        T::from_i32(i) * self.texel_size
-    }
-
     /// The texture-space geometry of texel `(x, y)`: its uv square `[u0, v0, u1, v1]` and
     /// its corner heights `[h00, h10, h01, h11]` (the two microtriangles, or a flat texel).
     #[must_use]
@@ -366,6 +361,8 @@ impl<T: Real> DisplacedSurface<T> {
     /// (exactly, from `f32` to `f64` or to itself).
     fn texel_geometry_in<C: Real>(&self, x: i32, y: i32) -> ([C; 4], [C; 4]) {
         let c = self.field.texel_corners(i64::from(x), i64::from(y));
+        // In i64: the far side of texel i32::MAX is 2^31 (a public call may name any texel).
+        let (x, y) = (i64::from(x), i64::from(y));
         let uv = [x, y, x + 1, y + 1].map(|i| self.coord_in::<C>(i));
         (uv, c.map(Self::height_in::<C>))
     }
@@ -383,11 +380,13 @@ impl<T: Real> DisplacedSurface<T> {
 
     /// The texture coordinate of cell boundary `i` in `C`, as [`DisplacedSurface::height_in`].
     #[inline]
-    fn coord_in<C: Real>(&self, i: i32) -> C {
+    fn coord_in<C: Real>(&self, i: i64) -> C {
+        // |i| <= 2^31: exact in f64, and rounded once to C as an i32 would be.
+        let boundary = C::from_f64(i as f64);
         if C::MANTISSA_DIGITS == T::MANTISSA_DIGITS {
-            C::from_i32(i) * C::from_f64(self.texel_size.to_f64())
+            boundary * C::from_f64(self.texel_size.to_f64())
         } else {
-            C::from_f64(self.coord(i).to_f64())
+            C::from_f64((T::from_f64(i as f64) * self.texel_size).to_f64())
         }
     }
 
@@ -1284,6 +1283,22 @@ mod tests {
         let heights = random_heights(side, 0x2545_f491_4f6c_dd1d_u64);
         let field = HeightField::from_unit_heights(side, &heights, Wrap::Clamp).unwrap();
         (mesh, field)
+    }
+
+    /// Any texel can be asked for its geometry (the marching baseline's normal asks for the
+    /// texel of a hit whose texture coordinate saturated): the far side of texel `i32::MAX`
+    /// is `2^31` texels, not an overflow.
+    #[test]
+    fn texel_geometry_holds_for_every_texel() {
+        let (mesh, field) = seamed_and_plain_squares();
+        let surface = DisplacedSurface::new(mesh, field, 0.3, 1.0).unwrap();
+        let size = surface.texel_size();
+        let far = (1u64 << 31) as f64;
+        let ([u0, v0, u1, v1], _) = surface.texel_geometry(i32::MAX, i32::MIN);
+        assert_eq!(
+            [u0, u1, v0, v1],
+            [far - 1.0, far, -far, 1.0 - far].map(|c| c * size)
+        );
     }
 
     /// A base triangle may span [`MAX_TEXEL_RANGE`] texels per axis and no more: one more
