@@ -123,8 +123,10 @@ pub const SEAM_SCENES: [&str; 2] = ["seam-cube", "seam-sphere"];
 /// renders: `mountain-grazing` (the mountain seen at grazing angles), `fur-cones` (the fur's
 /// torus under broad cones, [`fur_cones`]), `fig9-displaced` (Fig.
 /// 9's columns with a height map), the ghost-hit tori ([`ghost_torus`]) and the seam scenes
-/// ([`SEAM_SCENES`]), for `nlrt watertight`, and usable everywhere a scene is.
-pub const VARIANT_NAMES: [&str; 8] = [
+/// ([`SEAM_SCENES`]), and `torus-coarse` ([`coarse_torus`]), for `nlrt watertight`, and
+/// usable everywhere a scene is.
+pub const VARIANT_NAMES: [&str; 9] = [
+    "torus-coarse",
     "mountain-grazing",
     "fur-cones",
     "fig9-displaced",
@@ -216,6 +218,7 @@ pub fn builtin(name: &str, size: Size) -> Option<Scene> {
         "fig9" => Some(fig9()),
         "fig9-displaced" => Some(fig9_displaced(map(1024, 256))),
         "torus-spikes" | "torus-tilted" | "torus-twisted" => ghost_torus(name, map(256, 64)),
+        "torus-coarse" => Some(coarse_torus(6, 4, 0.6, map(256, 64))),
         "cornell" => Some(cornell(size.detail(15, 6))),
         "seam-cube" => Some(seam_cube(map(1024, 256))),
         "seam-sphere" => Some(seam_sphere(map(1024, 256))),
@@ -919,6 +922,49 @@ pub fn ghost_torus(kind: &str, side: usize) -> Option<Scene> {
     scene.height_scale = height_scale;
     scene.tiling = 1.0;
     Some(scene)
+}
+
+/// A coarse, strongly bent torus: `n_ring x n_tube` quads (tens of base triangles, where the
+/// built-in tori have thousands), so each prism's three directions differ by 60-90 degrees;
+/// a shell of `height_scale` (above the tube's radius 0.4, the inner ring's prisms overlap);
+/// a map of isolated full-height single-texel spikes (one in 35 texels) beside a half-height
+/// step over half the map. The first of the family that `docs/watertightness.md` ("Coarse,
+/// strongly bent prisms") sweeps; f32 leaks at its base edges.
+#[must_use]
+pub fn coarse_torus(n_ring: usize, n_tube: usize, height_scale: f64, side: usize) -> Scene {
+    let (positions, normals, uvs, triangles) = grid(n_ring, n_tube, |u, v| {
+        let (a, b) = (TAU * u, TAU * v);
+        let centre = DVec3::new(a.cos(), 0.0, a.sin());
+        let n = DVec3::new(a.cos() * b.cos(), b.sin(), a.sin() * b.cos());
+        (centre + n * 0.4, n)
+    });
+    let heights: Vec<f32> = (0..side * side)
+        .map(|k| {
+            let (i, j) = (k % side, k / side);
+            if i % 5 == 2 && j % 7 == 3 {
+                1.0
+            } else if i >= side / 2 {
+                0.5
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    let mut scene = torus_scene(side);
+    scene.name = "torus-coarse";
+    scene.positions = positions;
+    scene.normals = normals;
+    scene.uvs = uvs;
+    scene.triangles = triangles;
+    scene.content = Content::Displacement(field(side, &heights));
+    scene.height_scale = height_scale;
+    scene.tiling = 1.0;
+    scene.camera = Camera {
+        eye: DVec3::new(0.0, 2.2, 2.6),
+        target: DVec3::ZERO,
+        fov_degrees: 45.0,
+    };
+    scene
 }
 
 /// Fig. 9: a Cornell-box object instanced once in the shell of a two-triangle rectangle, in
