@@ -32,8 +32,9 @@ fn kept_in<T: Real>(found: &[T], lo: T, hi: T) -> Roots<T> {
     Roots::from_unsorted(inside, n)
 }
 
-/// [`kept_in`] for a caller that already holds a peer's whole-line roots: the wrapper's own
-/// cost, timed alone by the criterion group `cubic_peer_wrapper`.
+/// The peers' wrapper (the values of `found` in `[lo, hi]`, increasing and distinct) for a
+/// caller that already holds a peer's whole-line roots: the wrapper's own cost, timed alone by
+/// the criterion group `cubic_peer_wrapper`.
 #[must_use]
 #[inline]
 pub fn roots_in<T: Real>(found: &[T], lo: T, hi: T) -> Roots<T> {
