@@ -542,31 +542,62 @@ impl<T: Real> DisplacedSurface<T> {
         };
         // The error window of a base-edge crossing (split tags 6-8).
         let edge_window = |edge: u8, s: C| edges.window(usize::from(edge - 6), s);
-        if flat {
-            // The curve meets the plane h = h00 at one point: a hit when that point is in the
-            // texel (u(h), v(h) are the same numbers in every texel, so neighbours agree) and
-            // in the base triangle, where a base edge whose crossing lies within its error
-            // window of h00 counts as passed (as the pieces are extended above).
-            let d = ray.d[2].mul_add(h00, ray.d[1]).mul_add(h00, ray.d[0]);
-            if d != C::ZERO {
-                let u = ray.u[2].mul_add(h00, ray.u[1]).mul_add(h00, ray.u[0]) / d;
-                let v = ray.v[2].mul_add(h00, ray.v[1]).mul_add(h00, ray.v[0]) / d;
-                let in_texel = u >= u0 && u <= u1 && v >= v0 && v <= v1;
-                let positive = d > C::ZERO;
-                let edge_ok = |k: usize| {
-                    let q = &base_edges[k];
-                    let value = q[2].mul_add(h00, q[1]).mul_add(h00, q[0]);
-                    let value = if k == 2 { -value } else { value };
-                    value == C::ZERO || (value > C::ZERO) == positive || {
-                        let w = edge_window(6 + k as u8, h00);
-                        !solve_quadratic_in(*q, h00 - w, h00 + w).is_empty()
-                    }
-                };
-                if in_texel && edge_ok(0) && edge_ok(1) && edge_ok(2) {
-                    consider(h00, &abh_l, TexelPart::Flat, &mut t_max);
+        // The curve's point at the height `c` of a horizontal plane, when it lies in the texel
+        // (u(h), v(h) are the same numbers in every texel, so neighbours agree) and in the base
+        // triangle, where a base edge whose crossing lies within its error window of `c`
+        // counts as passed (as the pieces are extended below): `Some(on the lower side of
+        // the diagonal or on it, on the upper side or on it)`.
+        let point_at = |c: C| -> Option<(bool, bool)> {
+            let d = ray.d[2].mul_add(c, ray.d[1]).mul_add(c, ray.d[0]);
+            if d == C::ZERO {
+                return None;
+            }
+            let u = ray.u[2].mul_add(c, ray.u[1]).mul_add(c, ray.u[0]) / d;
+            let v = ray.v[2].mul_add(c, ray.v[1]).mul_add(c, ray.v[0]) / d;
+            let in_texel = u >= u0 && u <= u1 && v >= v0 && v <= v1;
+            let positive = d > C::ZERO;
+            let edge_ok = |k: usize| {
+                let q = &base_edges[k];
+                let value = q[2].mul_add(c, q[1]).mul_add(c, q[0]);
+                let value = if k == 2 { -value } else { value };
+                value == C::ZERO || (value > C::ZERO) == positive || {
+                    let w = edge_window(6 + k as u8, c);
+                    !solve_quadratic_in(*q, c - w, c + w).is_empty()
                 }
+            };
+            if !(in_texel && edge_ok(0) && edge_ok(1) && edge_ok(2)) {
+                return None;
+            }
+            // The side of the diagonal as `locate` decides it, the diagonal itself on both.
+            let f = diagonal[2].mul_add(c, diagonal[1]).mul_add(c, diagonal[0]);
+            let lower = (f >= C::ZERO) == positive;
+            Some((lower || f == C::ZERO, !lower || f == C::ZERO))
+        };
+        if flat {
+            // The curve meets the plane h = h00 at one point: a hit where `point_at` holds.
+            if point_at(h00).is_some() {
+                consider(h00, &abh_l, TexelPart::Flat, &mut t_max);
             }
             return best;
+        }
+        // A horizontal microtriangle (its three corners at one height) at the texel's lowest
+        // or highest height: its plane's cubic, `D(h) (h - c)` up to the coefficients'
+        // rounding, has its root at an end of the heights searched, where that rounding can
+        // move it just outside (the piece search then loses the hit: f32 leaks on coarse
+        // prisms, a plateau's texel beside a spike, `docs/watertightness.md`). Decided as a
+        // flat texel is, by the curve's point at that height, on this part's side of the
+        // diagonal; the piece search below may find the same hit, the nearer one is kept.
+        for (horizontal, c, part, abh) in [
+            (h00 == h10 && h10 == h11, h00, part_l, &abh_l),
+            (h00 == h11 && h11 == h01, h00, part_u, &abh_u),
+        ] {
+            if horizontal
+                && (c == h_lo || c == h_hi)
+                && let Some((lower, upper)) = point_at(c)
+                && (if part == part_l { lower } else { upper })
+            {
+                consider(c, abh, part, &mut t_max);
+            }
         }
         // The base is a floor under the surface (heights are >= 0): a ray that leaves the shell
         // through the base inside this texel, descending, has met the surface by then. Where it
