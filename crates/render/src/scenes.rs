@@ -928,8 +928,9 @@ pub fn ghost_torus(kind: &str, side: usize) -> Option<Scene> {
 /// built-in tori have thousands), so each prism's three directions differ by 60-90 degrees;
 /// a shell of `height_scale` (above the tube's radius 0.4, the inner ring's prisms overlap);
 /// a map of isolated full-height single-texel spikes (one in 35 texels) beside a half-height
-/// step over half the map. The first of the family that `docs/watertightness.md` ("Coarse,
-/// strongly bent prisms") sweeps; f32 leaks at its base edges.
+/// step over half the map. The first of the family that `docs/watertightness.md` ("Coarse
+/// prisms and horizontal microtriangles") sweeps: its plateau texels beside a spike hold a
+/// horizontal microtriangle at the texel's lowest height, which f32 once lost to rounding.
 #[must_use]
 pub fn coarse_torus(n_ring: usize, n_tube: usize, height_scale: f64, side: usize) -> Scene {
     let (positions, normals, uvs, triangles) = grid(n_ring, n_tube, |u, v| {
