@@ -127,8 +127,9 @@ fn slow_units_walk_a_bounded_number_of_nodes() {
 /// 151,889 texels), `long-column-miss` for a normal beyond `max_world_coordinate`; and
 /// `subnormal-hit-band`, traced: a prism traced in f64 over 9,398 x 2,700 texels whose one
 /// ray (a hit at `t = 2.2e-44`) makes 29.9M node and 3.7M texel tests (4.4 s in release),
-/// within the bound; `affine-range-walk`, slow for the tessellation-free baseline only (7.7 s,
-/// 28M texel tests over a 9,398^2 range; the nonlinear walk rejects its ray in f64 at once).
+/// within the bound; `affine-range-walk` and `affine-range-walk-2`, slow for the
+/// tessellation-free baseline only (7.7 s and 15.8 s, 28M and 68M texel tests over 9,398^2 and
+/// 12,659 x 12,658 ranges; the nonlinear walk rejects their rays in f64 at once).
 #[test]
 fn slow_units_walk_a_bounded_number_of_nodes_f32() {
     walk_is_bounded(
