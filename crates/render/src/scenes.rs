@@ -912,16 +912,32 @@ pub fn ghost_torus(kind: &str, side: usize) -> Option<Scene> {
             uv.y += 2.0 * uv.x;
         }
     }
-    let mut scene = torus_scene(side);
+    Some(torus_variant(
+        name,
+        (positions, normals, uvs, triangles),
+        field(side, &heights),
+        height_scale,
+    ))
+}
+
+/// The torus scene's camera, light and material over another base mesh, map and height
+/// scale (tiling 1): the tori made for one measurement.
+fn torus_variant(
+    name: &'static str,
+    (positions, normals, uvs, triangles): (Vec<DVec3>, Vec<DVec3>, Vec<DVec2>, Vec<[u32; 3]>),
+    map: HeightField,
+    height_scale: f64,
+) -> Scene {
+    let mut scene = torus_scene(map.side());
     scene.name = name;
     scene.positions = positions;
     scene.normals = normals;
     scene.uvs = uvs;
     scene.triangles = triangles;
-    scene.content = Content::Displacement(field(side, &heights));
+    scene.content = Content::Displacement(map);
     scene.height_scale = height_scale;
     scene.tiling = 1.0;
-    Some(scene)
+    scene
 }
 
 /// A coarse, strongly bent torus: `n_ring x n_tube` quads (tens of base triangles, where the
@@ -951,15 +967,12 @@ pub fn coarse_torus(n_ring: usize, n_tube: usize, height_scale: f64, side: usize
             }
         })
         .collect();
-    let mut scene = torus_scene(side);
-    scene.name = "torus-coarse";
-    scene.positions = positions;
-    scene.normals = normals;
-    scene.uvs = uvs;
-    scene.triangles = triangles;
-    scene.content = Content::Displacement(field(side, &heights));
-    scene.height_scale = height_scale;
-    scene.tiling = 1.0;
+    let mut scene = torus_variant(
+        "torus-coarse",
+        (positions, normals, uvs, triangles),
+        field(side, &heights),
+        height_scale,
+    );
     scene.camera = Camera {
         eye: DVec3::new(0.0, 2.2, 2.6),
         target: DVec3::ZERO,
