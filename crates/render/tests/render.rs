@@ -79,6 +79,18 @@ fn curved_scenes_agree_with_the_reference_on_most_pixels() {
     }
 }
 
+/// Runs `nlrt` with `args`, requires success (printing its stderr otherwise) and returns its
+/// standard output.
+fn nlrt_stdout(args: &[&str]) -> String {
+    let out = nlrt(args);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
 fn nlrt(args: &[&str]) -> std::process::Output {
     Command::new(env!("CARGO_BIN_EXE_nlrt"))
         .args(args)
@@ -693,13 +705,7 @@ fn bench_json_holds_every_row() {
         "--json",
         p,
     ];
-    let out = nlrt(&args);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let table = String::from_utf8_lossy(&out.stdout);
+    let table = nlrt_stdout(&args);
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
     assert_eq!(json["format"], "nlrt-bench/1");
@@ -772,13 +778,7 @@ fn bench_rounds_interleave_the_stream_replays() {
         "--json",
         path.to_str().unwrap(),
     ];
-    let out = nlrt(&args);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let table = String::from_utf8_lossy(&out.stdout);
+    let table = nlrt_stdout(&args);
     assert!(
         table.contains("### Interleaved rounds of the stream"),
         "{table}"
