@@ -11,6 +11,7 @@ use nlrt_shellmap::{
     facing_unit, root_decidedly_outside_in_f64, world_normal,
 };
 
+use crate::affine::{AffinePatches, walk_straight};
 use crate::bvh::{Aabb, Bvh4};
 use crate::cells::{CURVE_STACK, CellSize, walk_cells};
 use crate::heightfield::{HEIGHT_ONE, HeightField};
@@ -118,6 +119,10 @@ pub struct DisplacedSurface<T: Real> {
     seam_rule: SeamRule,
     /// `seam_rule` is [`SeamRule::Closed`] and the mesh has seams: walls are tested.
     has_walls: bool,
+    /// The mesh's affine patches, walked along straight lines (`crate::affine`).
+    straight: AffinePatches<T>,
+    /// Whether affine patches are walked straight (else every prism takes the curved path).
+    straight_walk: bool,
 }
 
 impl<T: Real> DisplacedSurface<T> {
@@ -202,7 +207,10 @@ impl<T: Real> DisplacedSurface<T> {
                 DisplacementError::TexelRangeTooLarge { triangle, range }
             }
         })?;
+        let straight = AffinePatches::find(&prisms.mesh, height_scale, tiling, field.side());
         Ok(Self {
+            straight,
+            straight_walk: true,
             prisms,
             field,
             texel_size: T::ONE / T::from_f64(side),
@@ -280,15 +288,39 @@ impl<T: Real> DisplacedSurface<T> {
         update: TlasUpdate,
     ) -> Result<PoseUpdate, MeshError> {
         let vertices = self.mesh().positions().len();
-        if self.seam_rule == SeamRule::Closed
+        let update = if self.seam_rule == SeamRule::Closed
             && self.seams.welds_something()
             && positions.len() == vertices
             && normals.len() == vertices
         {
             let welded = self.seams.welded_normals::<T>(normals);
-            return self.prisms.set_pose(positions, &welded, update);
-        }
-        self.prisms.set_pose(positions, normals, update)
+            self.prisms.set_pose(positions, &welded, update)
+        } else {
+            self.prisms.set_pose(positions, normals, update)
+        }?;
+        // A pose may make prisms affine or curved: the patches follow it.
+        self.straight = AffinePatches::find(
+            &self.prisms.mesh,
+            self.prisms.height_scale,
+            self.prisms.tiling,
+            self.field.side(),
+        );
+        Ok(update)
+    }
+
+    /// Whether prisms whose three displacement directions are equal (in patches that are whole
+    /// connected parts of the mesh) are walked along the ray's straight line in texel space
+    /// (the default), or every prism along its curve (for comparison: the same surface, hits
+    /// within rounding).
+    pub fn set_straight_walk(&mut self, on: bool) {
+        self.straight_walk = on;
+    }
+
+    /// The base triangles walked along straight lines when [`DisplacedSurface::set_straight_walk`]
+    /// is on: the affine prisms of patches that are whole connected parts of the mesh.
+    #[must_use]
+    pub fn straight_triangles(&self) -> usize {
+        self.straight.straight_triangles()
     }
 
     /// Root nodes of triangle `i`.
@@ -308,7 +340,7 @@ impl<T: Real> DisplacedSurface<T> {
     /// counted separately by [`BaseMesh::memory_bytes`]).
     #[must_use]
     pub fn memory_bytes(&self) -> usize {
-        self.field.memory_bytes() + self.prisms.memory_bytes()
+        self.field.memory_bytes() + self.prisms.memory_bytes() + self.straight.memory_bytes()
     }
 
     /// The uv side of one texel (`1 / side` of the map): texture coordinates divided by it
@@ -872,10 +904,43 @@ impl<T: Real> DisplacedSurface<T> {
         t_max: T,
         stats: &mut TraversalStats,
     ) -> Option<SurfaceHit<T>> {
+        // Eq. 6's frame depends on the ray alone: set up once for all its prisms.
+        let frame = ray.perpendiculars();
         self.prisms
-            .intersect(ray, t_min, t_max, stats, |tri, prism, nl, t_max, stats| {
-                let hit = self.intersect_blas(tri, prism, nl, t_min, t_max, stats);
-                let hit = self.nearer_wall_hit(tri, prism, nl, t_min, t_max, hit)?;
+            .traverse(ray, t_min, t_max, |tri, prism, t_max| {
+                stats.prism_tests += 1;
+                if self.straight_walk
+                    && let Some((line, triangle)) = self.straight.line(tri, ray)
+                {
+                    // An affine patch has no seam edge (a seam's two sides differ in uv): no wall.
+                    let roots = self.prisms.roots(tri);
+                    let found = walk_straight(
+                        &self.field,
+                        roots,
+                        line,
+                        triangle,
+                        prism,
+                        t_min,
+                        t_max,
+                        stats,
+                    )?;
+                    let hit = SurfaceHit {
+                        hit: found.hit,
+                        triangle: tri as u32,
+                        texel: found.texel,
+                        part: match found.part {
+                            0 => TexelPart::Lower,
+                            1 => TexelPart::Upper,
+                            _ => TexelPart::Flat,
+                        },
+                    };
+                    return Some((hit, hit.hit.t));
+                }
+                let nl = NonlinearRay::with_perpendiculars(prism, ray, frame);
+                // See `PrismTlas::intersect`: finite for a ray that entered the prism's box.
+                debug_assert!(nl.is_finite(), "{nl:?} in {prism:?}");
+                let hit = self.intersect_blas(tri, prism, &nl, t_min, t_max, stats);
+                let hit = self.nearer_wall_hit(tri, prism, &nl, t_min, t_max, hit)?;
                 Some((hit, hit.hit.t))
             })
     }

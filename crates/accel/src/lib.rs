@@ -41,6 +41,7 @@ compile_error!("nlrt-accel needs the `std` or the `libm` feature");
 
 extern crate alloc;
 
+mod affine;
 mod bvh;
 mod cells;
 mod displacement;

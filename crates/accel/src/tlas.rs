@@ -107,7 +107,7 @@ pub(crate) fn within_world_range<T: Real>(prism: &Prism<T>) -> bool {
 pub(crate) struct PrismTlas<T: Real> {
     pub(crate) mesh: BaseMesh<T>,
     pub(crate) height_scale: T,
-    tiling: T,
+    pub(crate) tiling: T,
     roots: Vec<RootNodes>,
     pub(crate) tlas: Bvh4<T>,
     /// The TLAS's SAH cost right after its last build.

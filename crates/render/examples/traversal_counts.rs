@@ -65,9 +65,73 @@ fn trace_all<T: Real>(
     (hits, st, checksum)
 }
 
-fn run<T: Real>(name: &str, scene: &Scene, w: usize) {
+/// Which BLAS walk affine prisms take.
+#[derive(Clone, Copy, PartialEq)]
+enum Walk {
+    Straight,
+    Curved,
+    Compare,
+}
+
+/// Hits of both walks on the same rays: rays where one hits and the other does not, and the
+/// largest relative difference of their distances where both hit.
+fn compare<T: Real>(scene: &Scene, w: usize, h: usize) {
+    let mut straight = Nonlinear::<T>::new(scene);
+    let mut curved = Nonlinear::<T>::new(scene);
+    let Nonlinear::Displaced(c) = &mut curved else {
+        common::fail(PROGRAM, "compare needs a displacement scene");
+    };
+    c.set_straight_walk(false);
+    let (Nonlinear::Displaced(c), Nonlinear::Displaced(s)) = (&curved, &mut straight) else {
+        unreachable!("both built from one displacement scene");
+    };
+    s.set_straight_walk(true);
+    let v = |a: nlrt_poly::glam::DVec3| {
+        T::Vec3::new(T::from_f64(a.x), T::from_f64(a.y), T::from_f64(a.z))
+    };
+    let (mut disagree, mut both, mut worst, mut same_texel) = (0, 0, 0.0f64, 0);
+    for y in 0..h {
+        for x in 0..w {
+            let d = scene.camera.direction(
+                (x as f64 + 0.5) / w as f64,
+                (y as f64 + 0.5) / h as f64,
+                w as f64 / h as f64,
+            );
+            let Some(ray) = Ray::new(v(scene.camera.eye), v(d)) else {
+                continue;
+            };
+            let mut st = TraversalStats::default();
+            let a = s.intersect(&ray, T::ZERO, T::INFINITY, &mut st);
+            let b = c.intersect(&ray, T::ZERO, T::INFINITY, &mut st);
+            match (a, b) {
+                (Some(a), Some(b)) => {
+                    both += 1;
+                    let (ta, tb) = (a.hit.t.to_f64(), b.hit.t.to_f64());
+                    worst = worst.max((ta - tb).abs() / tb.abs());
+                    same_texel += usize::from(a.texel == b.texel && a.part == b.part);
+                }
+                (None, None) => {}
+                _ => disagree += 1,
+            }
+        }
+    }
+    println!(
+        "{} straight vs curved: {disagree} hit/miss disagreements of {} rays, both hit {both} (same microtriangle {same_texel}), largest relative difference in t {worst:.3e}",
+        T::NAME,
+        w * h
+    );
+}
+
+fn run<T: Real>(name: &str, scene: &Scene, w: usize, walk: Walk) {
     let h = w * 3 / 4;
-    let nl = Nonlinear::<T>::new(scene);
+    if walk == Walk::Compare {
+        compare::<T>(scene, w, h);
+        return;
+    }
+    let mut nl = Nonlinear::<T>::new(scene);
+    if let Nonlinear::Displaced(s) = &mut nl {
+        s.set_straight_walk(walk == Walk::Straight);
+    }
     let t0 = std::time::Instant::now();
     let (hits, st, checksum) = trace_all(scene, &nl, w, h);
     let n = (w * h) as f64;
@@ -87,14 +151,20 @@ fn main() {
     let args: Vec<String> = std::env::args().collect();
     let (name, mut scene) = common::scene_from_args(&args, PROGRAM);
     let w = common::width_from_args(&args, 4, 160, PROGRAM);
+    let mut walk = Walk::Straight;
     match args.get(5).map(String::as_str) {
         None => {}
         Some("open") => scene.seam_rule = nlrt_accel::SeamRule::Open,
-        Some(other) => common::fail(PROGRAM, &format!("unknown option {other} (open)")),
+        Some("curved") => walk = Walk::Curved,
+        Some("compare") => walk = Walk::Compare,
+        Some(other) => common::fail(
+            PROGRAM,
+            &format!("unknown option {other} (open, curved or compare)"),
+        ),
     }
     match args.get(3).map(String::as_str) {
-        None | Some("f32") => run::<f32>(name, &scene, w),
-        Some("f64") => run::<f64>(name, &scene, w),
+        None | Some("f32") => run::<f32>(name, &scene, w, walk),
+        Some("f64") => run::<f64>(name, &scene, w, walk),
         Some(other) => common::fail(PROGRAM, &format!("unknown precision {other} (f32 or f64)")),
     }
 }

@@ -1,0 +1,779 @@
+//! Straight rays in affine prisms.
+//!
+//! Where a base triangle's three displacement directions are equal (a flat terrain, a facade,
+//! every flat part of a mesh with one shared normal), the shell map
+//! `P(alpha, beta, h) = B(alpha, beta) + h N` is affine, and so is the map from texel space
+//! `(x, y, h)` (texture coordinates times the map's side, heights in `[0, 1]`) to the world.
+//! A ray is a straight line there, every microtriangle a flat triangle with integer texel
+//! corners, and the min-max pyramid is walked as maximum-mipmap height-field tracers walk it
+//! (Tevs et al. 2008): a node's four children are slabs in `x` and `y`, the line's heights at
+//! a child's entry and exit bound its heights inside, and texels are decided by a watertight
+//! ray-triangle test (Woop, Benthin and Wald 2013) instead of the curved path's quadratics and
+//! cubics.
+//!
+//! Watertightness has three parts.
+//! - Inside a texel grid: a texel corner is transformed into the test's sheared frame by one
+//!   function of the corner alone, and each edge function is a difference of two products of
+//!   those numbers, so the two microtriangles that share an edge compute exactly negated
+//!   values for it: a ray cannot pass between them.
+//! - The walk never loses a texel the test would hit: node boxes are padded by a bound on the
+//!   test's rounding ([`StraightLine::pad_xy`], [`StraightLine::pad_h`]).
+//! - Between base triangles: triangles whose affine maps agree are grouped into a patch traced
+//!   in one frame, so all of them see the same line, bit for bit, and the same hit points; a
+//!   hit belongs to the triangles whose texel-space edges it lies on or inside, each edge's
+//!   function computed from its two corners in one canonical order (the same number in both
+//!   triangles that share it). A patch is walked straight only when it is a whole connected
+//!   part of the mesh (its outer edges are the mesh's border), so that no straight-walked
+//!   triangle shares an edge with a curved-walked one; other affine triangles keep the curved
+//!   path, whose edge windows join them to their neighbours.
+
+use alloc::vec;
+use alloc::vec::Vec;
+use nlrt_poly::{Real, Vector2, Vector3};
+use nlrt_shellmap::{Hit, Prism, Ray, onto_base_triangle};
+
+use crate::heightfield::{HEIGHT_ONE, HeightField};
+use crate::mesh::BaseMesh;
+use crate::stats::TraversalStats;
+use crate::tlas::RootNodes;
+
+/// The relative difference within which two triangles' affine maps are taken as one map (a
+/// patch traced in one frame): `2^-40` lies far above the `f64` rounding of a map computed
+/// from `f32` or `f64` vertices (a few units of `2^-53` times the frame's condition, which is
+/// below [`MAX_FRAME_CONDITION`]), and far below any difference a modeller means (a triangle
+/// moved by it moves by `2^-40` of the scene's size, under an `f32` ulp by a factor of
+/// `2^16`).
+const SAME_MAP: f64 = 1.0 / (1u64 << 40) as f64;
+
+/// Frames more ill-conditioned than this (the displacement direction nearly in the base
+/// plane) are traced on the curved path: `2^10` keeps the inverse's `f64` error (condition
+/// times a few units of `2^-53`) below [`SAME_MAP`] by a factor of more than `2^2`.
+const MAX_FRAME_CONDITION: f64 = 1024.0;
+
+/// No patch: the triangle is traced on the curved path.
+const CURVED: u32 = u32::MAX;
+
+/// The map between the world and a patch's texel space `(x, y, h)`: world
+/// `p = origin + A (x, y, h)`, and back `q = to_texel (p - origin)`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct TexelFrame {
+    /// Columns of `A`: the world step per texel along `x`, along `y`, and the displacement
+    /// direction (times the height scale) per unit height.
+    columns: [[f64; 3]; 3],
+    /// `A^-1`, by rows.
+    to_texel: [[f64; 3]; 3],
+    /// The world point of texel-space `(0, 0, 0)`.
+    origin: [f64; 3],
+}
+
+fn sub3(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+fn dot3(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+fn cross3(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+fn norm3(a: [f64; 3]) -> f64 {
+    dot3(a, a).sqrt()
+}
+
+fn to_array<T: Real>(v: T::Vec3) -> [f64; 3] {
+    [v.x().to_f64(), v.y().to_f64(), v.z().to_f64()]
+}
+
+impl TexelFrame {
+    /// The frame of `prism` (uvs tiled, directions scaled) on a map of `side` texels per unit,
+    /// or `None` where its three directions differ in a bit, its uv triangle is degenerate or
+    /// the frame's condition exceeds [`MAX_FRAME_CONDITION`].
+    fn of_prism<T: Real>(prism: &Prism<T>, side: f64) -> Option<Self> {
+        if prism.n[0] != prism.n[1] || prism.n[0] != prism.n[2] {
+            return None;
+        }
+        let x = prism
+            .uv
+            .map(|uv| [uv.x().to_f64() * side, uv.y().to_f64() * side]);
+        let p = prism.p.map(to_array::<T>);
+        let (e1, e2) = (
+            [x[1][0] - x[0][0], x[1][1] - x[0][1]],
+            [x[2][0] - x[0][0], x[2][1] - x[0][1]],
+        );
+        let det_uv = e1[0] * e2[1] - e2[0] * e1[1];
+        if !(det_uv != 0.0 && det_uv.is_finite()) {
+            return None;
+        }
+        // (alpha, beta) = inverse(e1 e2) (x - x0): its rows.
+        let inv = [
+            [e2[1] / det_uv, -e2[0] / det_uv],
+            [-e1[1] / det_uv, e1[0] / det_uv],
+        ];
+        let (f1, f2) = (sub3(p[1], p[0]), sub3(p[2], p[0]));
+        let along = |j: usize| -> [f64; 3] {
+            core::array::from_fn(|k| f1[k] * inv[0][j] + f2[k] * inv[1][j])
+        };
+        let columns = [along(0), along(1), to_array::<T>(prism.n[0])];
+        let origin: [f64; 3] =
+            core::array::from_fn(|k| p[0][k] - columns[0][k] * x[0][0] - columns[1][k] * x[0][1]);
+        let rows = [
+            cross3(columns[1], columns[2]),
+            cross3(columns[2], columns[0]),
+            cross3(columns[0], columns[1]),
+        ];
+        let det = dot3(columns[0], rows[0]);
+        let volume = norm3(columns[0]) * norm3(columns[1]) * norm3(columns[2]);
+        if !(det.abs() * MAX_FRAME_CONDITION > volume && det.is_finite()) {
+            return None;
+        }
+        let to_texel = rows.map(|r| r.map(|v| v / det));
+        Some(Self {
+            columns,
+            to_texel,
+            origin,
+        })
+    }
+
+    /// Whether this map carries `prism`'s three corners onto its vertices within
+    /// [`SAME_MAP`] and its displacement direction is this one's, bit for bit.
+    fn holds<T: Real>(&self, prism: &Prism<T>, side: f64) -> bool {
+        let n = to_array::<T>(prism.n[0]);
+        if prism.n.iter().any(|m| to_array::<T>(*m) != self.columns[2]) || n != self.columns[2] {
+            return false;
+        }
+        (0..3).all(|i| {
+            let (x, y) = (
+                prism.uv[i].x().to_f64() * side,
+                prism.uv[i].y().to_f64() * side,
+            );
+            let p = to_array::<T>(prism.p[i]);
+            (0..3).all(|k| {
+                let a = self.columns[0][k] * x;
+                let b = self.columns[1][k] * y;
+                let mapped = self.origin[k] + a + b;
+                let scale = self.origin[k].abs() + a.abs() + b.abs() + p[k].abs();
+                (mapped - p[k]).abs() <= SAME_MAP * scale
+            })
+        })
+    }
+}
+
+/// One triangle of a patch in texel space: its corners, its edges for deciding which hits it
+/// owns, and the map back to its canonical coordinates.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct TexelTriangle<T> {
+    corners: [[T; 2]; 3],
+    /// Per edge `k` (corners `k`, `k + 1`): its corners in canonical order (the smaller
+    /// `(x, y)` first) and whether the triangle lies where the edge function is positive.
+    edges: [([T; 2], [T; 2], bool); 3],
+    /// Rows of the map from `(x, y) - corners[0]` to `(alpha, beta)`.
+    to_canonical: [[T; 2]; 2],
+}
+
+/// The edge function of `(a, b)` at `q`, with plain products: the same number for the same
+/// arguments in every triangle.
+#[inline]
+fn edge_function<T: Real>(a: [T; 2], b: [T; 2], q: [T; 2]) -> T {
+    let p = (b[0] - a[0]) * (q[1] - a[1]);
+    let r = (b[1] - a[1]) * (q[0] - a[0]);
+    p - r
+}
+
+impl<T: Real> TexelTriangle<T> {
+    fn new(prism: &Prism<T>, side: T) -> Self {
+        let corners = prism.uv.map(|uv| [uv.x() * side, uv.y() * side]);
+        let wide = corners.map(|c| [c[0].to_f64(), c[1].to_f64()]);
+        let edges = core::array::from_fn(|k| {
+            let (a, b) = (corners[k], corners[(k + 1) % 3]);
+            let (a, b) = if (a[0], a[1]) < (b[0], b[1]) {
+                (a, b)
+            } else {
+                (b, a)
+            };
+            let (aw, bw) = (
+                [a[0].to_f64(), a[1].to_f64()],
+                [b[0].to_f64(), b[1].to_f64()],
+            );
+            let c = wide[(k + 2) % 3];
+            let side = (bw[0] - aw[0]) * (c[1] - aw[1]) - (bw[1] - aw[1]) * (c[0] - aw[0]);
+            (a, b, side > 0.0)
+        });
+        let (e1, e2) = (
+            [wide[1][0] - wide[0][0], wide[1][1] - wide[0][1]],
+            [wide[2][0] - wide[0][0], wide[2][1] - wide[0][1]],
+        );
+        let det = e1[0] * e2[1] - e2[0] * e1[1];
+        let to_canonical = [
+            [T::from_f64(e2[1] / det), T::from_f64(-e2[0] / det)],
+            [T::from_f64(-e1[1] / det), T::from_f64(e1[0] / det)],
+        ];
+        Self {
+            corners,
+            edges,
+            to_canonical,
+        }
+    }
+
+    /// Whether the texel point `q` lies in the triangle or on its edges.
+    #[inline]
+    fn owns(&self, q: [T; 2]) -> bool {
+        self.edges.iter().all(|&(a, b, positive)| {
+            let e = edge_function(a, b, q);
+            if positive { e >= T::ZERO } else { e <= T::ZERO }
+        })
+    }
+
+    /// `(alpha, beta)` of the texel point `q`, moved onto the triangle.
+    fn canonical(&self, q: [T; 2]) -> (T, T) {
+        let d = [q[0] - self.corners[0][0], q[1] - self.corners[0][1]];
+        let m = &self.to_canonical;
+        onto_base_triangle(
+            m[0][0].mul_add(d[0], m[0][1] * d[1]),
+            m[1][0].mul_add(d[0], m[1][1] * d[1]),
+        )
+    }
+}
+
+/// The affine patches of a mesh: per triangle its patch (or the curved path) and its texel
+/// triangle, per patch the frame all its triangles are traced in.
+#[derive(Clone, Debug)]
+pub(crate) struct AffinePatches<T> {
+    patch_of: Vec<u32>,
+    frames: Vec<TexelFrame>,
+    triangles: Vec<Option<TexelTriangle<T>>>,
+}
+
+/// Union-find root with path halving.
+fn find(parent: &mut [u32], mut i: u32) -> u32 {
+    while parent[i as usize] != i {
+        let p = parent[parent[i as usize] as usize];
+        parent[i as usize] = p;
+        i = p;
+    }
+    i
+}
+
+impl<T: Real> AffinePatches<T> {
+    /// The patches of `mesh` displaced by `height_scale` with uvs times `tiling`, on a map of
+    /// `side` texels per unit.
+    pub(crate) fn find(mesh: &BaseMesh<T>, height_scale: T, tiling: T, side: usize) -> Self {
+        let count = mesh.triangle_count();
+        let side_f = side as f64;
+        let prisms: Vec<Prism<T>> = (0..count)
+            .map(|i| mesh.prism(i, height_scale, tiling))
+            .collect();
+        let frames: Vec<Option<TexelFrame>> = prisms
+            .iter()
+            .map(|p| TexelFrame::of_prism(p, side_f))
+            .collect();
+        // Edges keyed by their two positions' bits (the smaller key first), with the uvs at
+        // those positions: triangles meeting there share the edge.
+        let key = |v: T::Vec3| to_array::<T>(v).map(f64::to_bits);
+        let mut edges: Vec<([[u64; 3]; 2], u32, [[u64; 2]; 2])> = Vec::with_capacity(3 * count);
+        for (i, prism) in prisms.iter().enumerate() {
+            for k in 0..3 {
+                let (a, b) = (k, (k + 1) % 3);
+                let uv = |j: usize| {
+                    [
+                        prism.uv[j].x().to_f64().to_bits(),
+                        prism.uv[j].y().to_f64().to_bits(),
+                    ]
+                };
+                let (ka, kb) = (key(prism.p[a]), key(prism.p[b]));
+                let entry = if ka <= kb {
+                    ([ka, kb], i as u32, [uv(a), uv(b)])
+                } else {
+                    ([kb, ka], i as u32, [uv(b), uv(a)])
+                };
+                edges.push(entry);
+            }
+        }
+        edges.sort_unstable_by(|x, y| x.0.cmp(&y.0).then(x.1.cmp(&y.1)));
+        let mut parent: Vec<u32> = (0..count as u32).collect();
+        let mut blocked = vec![false; count];
+        for i in 0..count {
+            blocked[i] = frames[i].is_none();
+        }
+        let mut start = 0;
+        while start < edges.len() {
+            let mut end = start + 1;
+            while end < edges.len() && edges[end].0 == edges[start].0 {
+                end += 1;
+            }
+            let group = &edges[start..end];
+            if group.len() > 1 {
+                let joined = group.len() == 2 && group[0].1 != group[1].1 && {
+                    let (i, j) = (group[0].1 as usize, group[1].1 as usize);
+                    group[0].2 == group[1].2
+                        && frames[i].is_some_and(|f| f.holds(&prisms[j], side_f))
+                        && frames[j].is_some_and(|f| f.holds(&prisms[i], side_f))
+                };
+                if joined {
+                    let (a, b) = (find(&mut parent, group[0].1), find(&mut parent, group[1].1));
+                    parent[a.max(b) as usize] = a.min(b);
+                } else {
+                    for e in group {
+                        blocked[e.1 as usize] = true;
+                    }
+                }
+            }
+            start = end;
+        }
+        // A patch is usable when none of its triangles is blocked and each lies in the
+        // patch's frame (its root's, the smallest index).
+        let roots: Vec<u32> = (0..count as u32).map(|i| find(&mut parent, i)).collect();
+        let mut usable = vec![true; count];
+        for i in 0..count {
+            let r = roots[i] as usize;
+            let fits = frames[r].is_some_and(|f| f.holds(&prisms[i], side_f));
+            if blocked[i] || !fits {
+                usable[r] = false;
+            }
+        }
+        let mut patch_index = vec![CURVED; count];
+        let mut patch_frames = Vec::new();
+        let mut patch_of = vec![CURVED; count];
+        let mut triangles = vec![None; count];
+        let side_t = T::from_f64(side_f);
+        for i in 0..count {
+            let r = roots[i] as usize;
+            if !usable[r] {
+                continue;
+            }
+            if patch_index[r] == CURVED {
+                patch_index[r] = patch_frames.len() as u32;
+                // Usable: the root's frame exists.
+                patch_frames.extend(frames[r]);
+            }
+            patch_of[i] = patch_index[r];
+            triangles[i] = Some(TexelTriangle::new(&prisms[i], side_t));
+        }
+        Self {
+            patch_of,
+            frames: patch_frames,
+            triangles,
+        }
+    }
+
+    /// Triangles walked straight.
+    pub(crate) fn straight_triangles(&self) -> usize {
+        self.triangles.iter().flatten().count()
+    }
+
+    /// Bytes held.
+    pub(crate) fn memory_bytes(&self) -> usize {
+        self.patch_of.len() * 4
+            + self.frames.len() * core::mem::size_of::<TexelFrame>()
+            + self.triangles.len() * core::mem::size_of::<Option<TexelTriangle<T>>>()
+    }
+
+    /// The straight line of `ray` in triangle `tri`'s patch, or `None` for a curved triangle.
+    #[inline]
+    pub(crate) fn line(
+        &self,
+        tri: usize,
+        ray: &Ray<T>,
+    ) -> Option<(StraightLine<T>, &TexelTriangle<T>)> {
+        let patch = self.patch_of[tri];
+        if patch == CURVED {
+            return None;
+        }
+        let frame = &self.frames[patch as usize];
+        let triangle = self.triangles[tri].as_ref()?;
+        Some((StraightLine::new(frame, ray), triangle))
+    }
+}
+
+/// A ray in a patch's texel space, `q(t) = origin + t dir` with the world ray's `t`, rounded
+/// to `T` from its `f64` image, with the bounds that pad the walk's boxes.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct StraightLine<T> {
+    origin: [T; 3],
+    dir: [T; 3],
+    inv: [T; 3],
+    /// The line in `f64` (before rounding), for the clip.
+    wide: ([f64; 3], [f64; 3]),
+}
+
+impl<T: Real> StraightLine<T> {
+    fn new(frame: &TexelFrame, ray: &Ray<T>) -> Self {
+        let o = sub3(to_array::<T>(ray.origin), frame.origin);
+        let d = to_array::<T>(ray.dir);
+        let origin64 = frame.to_texel.map(|r| dot3(r, o));
+        let dir64 = frame.to_texel.map(|r| dot3(r, d));
+        let dir = dir64.map(T::from_f64);
+        Self {
+            origin: origin64.map(T::from_f64),
+            dir,
+            inv: dir.map(|v| T::ONE / v),
+            wide: (origin64, dir64),
+        }
+    }
+}
+
+/// Entries of the walk's stack: up to 4 roots, then each popped node pushes at most 4
+/// children (3 more than it took), once per level on the way down, 23 levels at most (cell
+/// coordinates are below `2^22`).
+const STACK: usize = 4 + 3 * 23;
+
+#[derive(Clone, Copy, Default)]
+struct Node<T> {
+    level: u32,
+    x: i32,
+    y: i32,
+    t_in: T,
+    t_out: T,
+}
+
+/// A hit of the straight walk: distance, canonical coordinates, height, texel, whether the
+/// upper microtriangle (or a flat texel) was hit.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct StraightHit<T: Real> {
+    pub(crate) hit: Hit<T>,
+    pub(crate) texel: [i32; 2],
+    /// 0 lower, 1 upper, 2 flat.
+    pub(crate) part: u8,
+}
+
+/// The walk's per-prism state: the line, its clip to the triangle, the paddings.
+struct Walk<'a, T: Real> {
+    line: StraightLine<T>,
+    triangle: &'a TexelTriangle<T>,
+    /// Woop's frame: the dominant axis of the direction last, shears of the other two.
+    axes: [usize; 3],
+    shear: [T; 3],
+    pad_xy: T,
+    pad_h: T,
+    t_min: T,
+}
+
+/// A sample as a height in `[0, 1]`, as the curved path converts it.
+#[inline]
+fn height<T: Real>(s: u16) -> T {
+    T::from_i32(i32::from(s)) / T::from_i32(i32::from(HEIGHT_ONE))
+}
+
+/// The `t` interval in which `o + t d` lies in `[lo, hi]` (`inv = 1 / d`).
+#[inline]
+fn slab<T: Real>(lo: T, hi: T, o: T, d: T, inv: T) -> (T, T) {
+    if d == T::ZERO {
+        return if o >= lo && o <= hi {
+            (-T::INFINITY, T::INFINITY)
+        } else {
+            (T::INFINITY, -T::INFINITY)
+        };
+    }
+    let (a, b) = ((lo - o) * inv, (hi - o) * inv);
+    (a.min(b), a.max(b))
+}
+
+/// A texel corner in Woop's sheared frame: `(X, Y, Z)` relative to the line's origin. A
+/// function of the corner alone, so that shared corners transform to the same numbers.
+#[inline]
+fn sheared<T: Real>(walk: &Walk<'_, T>, p: [T; 3]) -> [T; 3] {
+    let [kx, ky, kz] = walk.axes;
+    let rel = [
+        p[0] - walk.line.origin[0],
+        p[1] - walk.line.origin[1],
+        p[2] - walk.line.origin[2],
+    ];
+    [
+        (-walk.shear[0]).mul_add(rel[kz], rel[kx]),
+        (-walk.shear[1]).mul_add(rel[kz], rel[ky]),
+        walk.shear[2] * rel[kz],
+    ]
+}
+
+/// The watertight test (Woop et al. 2013, two-sided) of the triangle `a, b, c` (sheared
+/// corners): `(t, barycentrics)` or `None`. Edge functions are differences of plain products
+/// of the corners' numbers: the triangle across an edge computes the same value negated.
+#[inline]
+fn watertight<T: Real>(a: [T; 3], b: [T; 3], c: [T; 3]) -> Option<(T, [T; 3])> {
+    let edge = |p: [T; 3], q: [T; 3]| {
+        let e = p[0] * q[1] - p[1] * q[0];
+        if e == T::ZERO && T::MANTISSA_DIGITS < 53 {
+            // Exact products of 24-bit significands, one rounding of their difference in
+            // f64: the sign is exact.
+            let w = |v: T| v.to_f64();
+            T::from_f64(w(p[0]) * w(q[1]) - w(p[1]) * w(q[0]))
+        } else {
+            e
+        }
+    };
+    let u = edge(c, b);
+    let v = edge(a, c);
+    let w = edge(b, a);
+    let negative = u < T::ZERO || v < T::ZERO || w < T::ZERO;
+    let positive = u > T::ZERO || v > T::ZERO || w > T::ZERO;
+    if negative && positive {
+        return None;
+    }
+    let det = u + v + w;
+    if det == T::ZERO {
+        return None;
+    }
+    let t = u.mul_add(a[2], v.mul_add(b[2], w * c[2])) / det;
+    Some((t, [u / det, v / det, w / det]))
+}
+
+impl<T: Real> Walk<'_, T> {
+    /// Tests texel `(x, y)`: the nearer of its two microtriangles' hits in `[t_min, t_max]`
+    /// whose point the triangle owns.
+    fn texel(&self, x: i32, y: i32, corners: [u16; 4], t_max: T) -> Option<StraightHit<T>> {
+        let h = corners.map(height::<T>);
+        let (fx, fy) = (T::from_i32(x), T::from_i32(y));
+        let (gx, gy) = (fx + T::ONE, fy + T::ONE);
+        let p = [
+            [fx, fy, h[0]],
+            [gx, fy, h[1]],
+            [fx, gy, h[2]],
+            [gx, gy, h[3]],
+        ];
+        let s = p.map(|q| sheared(self, q));
+        let flat = h[0] == h[1] && h[0] == h[2] && h[0] == h[3];
+        let mut best: Option<StraightHit<T>> = None;
+        let mut t_max = t_max;
+        for (part, [i, j, k]) in [(0u8, [0, 1, 3]), (1u8, [0, 3, 2])] {
+            let Some((t, bary)) = watertight(s[i], s[j], s[k]) else {
+                continue;
+            };
+            if !(t >= self.t_min && t <= t_max) {
+                continue;
+            }
+            let point =
+                |a: usize| bary[0].mul_add(p[i][a], bary[1].mul_add(p[j][a], bary[2] * p[k][a]));
+            let q = [point(0), point(1)];
+            if !self.triangle.owns(q) {
+                continue;
+            }
+            let (alpha, beta) = self.triangle.canonical(q);
+            t_max = t;
+            best = Some(StraightHit {
+                hit: Hit {
+                    t,
+                    alpha,
+                    beta,
+                    h: point(2).max(T::ZERO).min(T::ONE),
+                    u: T::ZERO,
+                    v: T::ZERO,
+                },
+                texel: [x, y],
+                part: if flat { 2 } else { part },
+            });
+        }
+        best
+    }
+
+    /// The `t` interval of the line in node `(x, y)` of `level` (padded), within `[lo, hi]`,
+    /// when its heights there may meet the node's `bounds`.
+    #[inline]
+    fn child(&self, level: u32, x: i32, y: i32, bounds: [u16; 2], lo: T, hi: T) -> Option<(T, T)> {
+        let size = T::pow2(level as i32);
+        let (x0, y0) = (T::from_i32(x) * size, T::from_i32(y) * size);
+        let l = &self.line;
+        let (ax, bx) = slab(
+            x0 - self.pad_xy,
+            x0 + size + self.pad_xy,
+            l.origin[0],
+            l.dir[0],
+            l.inv[0],
+        );
+        let (ay, by) = slab(
+            y0 - self.pad_xy,
+            y0 + size + self.pad_xy,
+            l.origin[1],
+            l.dir[1],
+            l.inv[1],
+        );
+        let (t_in, t_out) = (ax.max(ay).max(lo), bx.min(by).min(hi));
+        if !(t_in <= t_out) {
+            return None;
+        }
+        let ha = t_in.mul_add(l.dir[2], l.origin[2]);
+        let hb = t_out.mul_add(l.dir[2], l.origin[2]);
+        let (line_lo, line_hi) = (ha.min(hb) - self.pad_h, ha.max(hb) + self.pad_h);
+        (line_lo <= height::<T>(bounds[1]) && line_hi >= height::<T>(bounds[0]))
+            .then_some((t_in, t_out))
+    }
+}
+
+/// The nearest hit of the straight `line` on the displaced surface over `triangle` (its root
+/// nodes `roots`) with `t` in `[t_min, t_max]`: the min-max pyramid walked nearest first
+/// along the line, texels tested by the watertight test.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn walk_straight<T: Real>(
+    field: &HeightField,
+    roots: RootNodes,
+    line: StraightLine<T>,
+    triangle: &TexelTriangle<T>,
+    prism: &Prism<T>,
+    t_min: T,
+    t_max: T,
+    stats: &mut TraversalStats,
+) -> Option<StraightHit<T>> {
+    let (t_lo, t_hi) = clip(&line, triangle, t_min, t_max)?;
+    let kz = {
+        let d = line.dir.map(|v| v.abs());
+        if d[0] >= d[1] && d[0] >= d[2] {
+            0
+        } else if d[1] >= d[2] {
+            1
+        } else {
+            2
+        }
+    };
+    let (kx, ky) = ((kz + 1) % 3, (kz + 2) % 3);
+    let shear = [
+        line.dir[kx] / line.dir[kz],
+        line.dir[ky] / line.dir[kz],
+        T::ONE / line.dir[kz],
+    ];
+    // The test's rounding: four roundings in the shear of a corner, on magnitudes up to twice
+    // its distance from the origin (the shears are at most 1), and the same for the line's
+    // point at the walk's far end; in texel units, and in heights.
+    let far = t_hi.abs().max(t_lo.abs());
+    let eps = T::EPSILON;
+    let corner = triangle
+        .corners
+        .iter()
+        .fold(T::ONE, |m, c| m.max(c[0].abs()).max(c[1].abs()));
+    let reach = |a: usize| line.origin[a].abs() + far * line.dir[a].abs();
+    let eight = T::from_i32(8);
+    let pad_xy = eight * eps * (reach(0).max(reach(1)) + corner + T::ONE);
+    let pad_h = eight * eps * (reach(2) + T::ONE);
+    let walk = Walk {
+        line,
+        triangle,
+        axes: [kx, ky, kz],
+        shear,
+        pad_xy,
+        pad_h,
+        t_min,
+    };
+    let mut best: Option<StraightHit<T>> = None;
+    let mut t_best = t_hi;
+    let mut stack = [Node::<T>::default(); STACK];
+    let mut top = 0;
+    for j in 0..i32::from(roots.ny) {
+        for i in 0..i32::from(roots.nx) {
+            let (x, y) = (roots.x + i, roots.y + j);
+            stats.box_tests += 1;
+            let bounds = field.texel_bounds(roots.level, i64::from(x), i64::from(y));
+            if let Some((t_in, t_out)) = walk.child(roots.level, x, y, bounds, t_lo, t_hi) {
+                stack[top] = Node {
+                    level: roots.level,
+                    x,
+                    y,
+                    t_in,
+                    t_out,
+                };
+                top += 1;
+            }
+        }
+    }
+    // Roots nearest last (popped first).
+    stack[..top].sort_unstable_by(|a, b| {
+        b.t_in
+            .partial_cmp(&a.t_in)
+            .unwrap_or(core::cmp::Ordering::Equal)
+    });
+    while top > 0 {
+        top -= 1;
+        let node = stack[top];
+        if node.t_in > t_best {
+            continue;
+        }
+        if node.level == 0 {
+            stats.texel_tests += 1;
+            let corners = field.texel_corners(i64::from(node.x), i64::from(node.y));
+            if let Some(hit) = walk.texel(node.x, node.y, corners, t_best) {
+                t_best = hit.hit.t;
+                best = Some(hit);
+            }
+            continue;
+        }
+        let level = node.level - 1;
+        let mut children = [(T::ZERO, 0i32, 0i32, T::ZERO); 4];
+        let mut n = 0;
+        for (i, j) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+            let (x, y) = (2 * node.x + i, 2 * node.y + j);
+            stats.box_tests += 1;
+            let bounds = field.texel_bounds(level, i64::from(x), i64::from(y));
+            if let Some((t_in, t_out)) =
+                walk.child(level, x, y, bounds, node.t_in, node.t_out.min(t_best))
+            {
+                children[n] = (t_in, x, y, t_out);
+                n += 1;
+            }
+        }
+        // Farthest first onto the stack: the nearest child is popped next.
+        let children = &mut children[..n];
+        children
+            .sort_unstable_by(|a, b| b.0.partial_cmp(&a.0).unwrap_or(core::cmp::Ordering::Equal));
+        for &(t_in, x, y, t_out) in children.iter() {
+            stack[top] = Node {
+                level,
+                x,
+                y,
+                t_in,
+                t_out,
+            };
+            top += 1;
+        }
+    }
+    best.map(|mut b| {
+        let uv = prism.texture_uv(b.hit.alpha, b.hit.beta);
+        b.hit.u = uv.x();
+        b.hit.v = uv.y();
+        b
+    })
+}
+
+/// The line's `t` interval inside the triangle's texel-space prism, padded by one texel
+/// across each base edge and by `1/64` in height (far beyond the rounding of the `T` line
+/// against the `f64` one it is computed from: half an ulp of coordinates below `2^22`, at
+/// most a quarter texel in `f32`), within `[t_min, t_max]`; `None` when empty. Computed in
+/// `f64` on the unrounded line: it only bounds the walk, the test decides the hits.
+fn clip<T: Real>(
+    line: &StraightLine<T>,
+    triangle: &TexelTriangle<T>,
+    t_min: T,
+    t_max: T,
+) -> Option<(T, T)> {
+    let (o, d) = line.wide;
+    let (mut lo, mut hi) = (t_min.to_f64(), t_max.to_f64());
+    let mut bound = |value: f64, rate: f64| {
+        // value + t rate >= 0
+        if rate == 0.0 {
+            if value < 0.0 {
+                hi = f64::NEG_INFINITY;
+            }
+        } else if rate > 0.0 {
+            lo = lo.max(-value / rate);
+        } else {
+            hi = hi.min(-value / rate);
+        }
+    };
+    let pad_h = 1.0 / 64.0;
+    bound(o[2] + pad_h, d[2]);
+    bound(1.0 + pad_h - o[2], -d[2]);
+    let c = triangle.corners.map(|c| [c[0].to_f64(), c[1].to_f64()]);
+    let orientation =
+        (c[1][0] - c[0][0]) * (c[2][1] - c[0][1]) - (c[1][1] - c[0][1]) * (c[2][0] - c[0][0]);
+    let sign = if orientation > 0.0 { 1.0 } else { -1.0 };
+    for k in 0..3 {
+        let (a, b) = (c[k], c[(k + 1) % 3]);
+        let e = [b[0] - a[0], b[1] - a[1]];
+        let length = (e[0] * e[0] + e[1] * e[1]).sqrt();
+        let value = sign * (e[0] * (o[1] - a[1]) - e[1] * (o[0] - a[0])) + length;
+        let rate = sign * (e[0] * d[1] - e[1] * d[0]);
+        bound(value, rate);
+    }
+    (lo <= hi).then(|| (T::from_f64(lo).max(t_min), T::from_f64(hi).min(t_max)))
+}
