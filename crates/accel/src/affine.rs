@@ -38,16 +38,25 @@ use crate::stats::TraversalStats;
 use crate::tlas::RootNodes;
 
 /// The relative difference within which two triangles' affine maps are taken as one map (a
-/// patch traced in one frame): `2^-40` lies far above the `f64` rounding of a map computed
-/// from `f32` or `f64` vertices (a few units of `2^-53` times the frame's condition, which is
-/// below [`MAX_FRAME_CONDITION`]), and far below any difference a modeller means (a triangle
-/// moved by it moves by `2^-40` of the scene's size, under an `f32` ulp by a factor of
-/// `2^16`).
-const SAME_MAP: f64 = 1.0 / (1u64 << 40) as f64;
+/// patch traced in one frame), in units of `T`'s unit roundoff: vertices given in `T` carry
+/// half an ulp of rounding each, which a frame fitted on three spanning vertices of a patch
+/// carries to the others with a factor of a few; 16 leaves room for that, and a triangle
+/// traced in its patch's frame then lies within 16 units of roundoff of its own vertices (a
+/// modeller's crease or fold is many orders larger). Never below [`MIN_SAME_MAP`].
+const SAME_MAP_ROUNDOFFS: f64 = 16.0;
+
+/// The floor of the same-map tolerance: the `f64` error of a frame whose condition is below
+/// [`MAX_FRAME_CONDITION`] (condition times a few units of `2^-53`) stays below `2^-40`.
+const MIN_SAME_MAP: f64 = 1.0 / (1u64 << 40) as f64;
+
+/// The same-map tolerance of `T` (relative).
+fn same_map<T: Real>() -> f64 {
+    (SAME_MAP_ROUNDOFFS * T::UNIT_ROUNDOFF.to_f64()).max(MIN_SAME_MAP)
+}
 
 /// Frames more ill-conditioned than this (the displacement direction nearly in the base
 /// plane) are traced on the curved path: `2^10` keeps the inverse's `f64` error (condition
-/// times a few units of `2^-53`) below [`SAME_MAP`] by a factor of more than `2^2`.
+/// times a few units of `2^-53`) below [`MIN_SAME_MAP`] by a factor of more than `2^2`.
 const MAX_FRAME_CONDITION: f64 = 1024.0;
 
 /// No patch: the triangle is traced on the curved path.
@@ -101,7 +110,12 @@ impl TexelFrame {
         let x = prism
             .uv
             .map(|uv| [uv.x().to_f64() * side, uv.y().to_f64() * side]);
-        let p = prism.p.map(to_array::<T>);
+        Self::of_points(prism.p.map(to_array::<T>), x, to_array::<T>(prism.n[0]))
+    }
+
+    /// The affine map carrying texel points `x` (height 0) onto world points `p`, with the
+    /// displacement direction `n` per unit height; `None` as [`TexelFrame::of_prism`].
+    fn of_points(p: [[f64; 3]; 3], x: [[f64; 2]; 3], n: [f64; 3]) -> Option<Self> {
         let (e1, e2) = (
             [x[1][0] - x[0][0], x[1][1] - x[0][1]],
             [x[2][0] - x[0][0], x[2][1] - x[0][1]],
@@ -119,7 +133,7 @@ impl TexelFrame {
         let along = |j: usize| -> [f64; 3] {
             core::array::from_fn(|k| f1[k] * inv[0][j] + f2[k] * inv[1][j])
         };
-        let columns = [along(0), along(1), to_array::<T>(prism.n[0])];
+        let columns = [along(0), along(1), n];
         let origin: [f64; 3] =
             core::array::from_fn(|k| p[0][k] - columns[0][k] * x[0][0] - columns[1][k] * x[0][1]);
         let rows = [
@@ -140,8 +154,8 @@ impl TexelFrame {
         })
     }
 
-    /// Whether this map carries `prism`'s three corners onto its vertices within
-    /// [`SAME_MAP`] and its displacement direction is this one's, bit for bit.
+    /// Whether this map carries `prism`'s three corners onto its vertices within the
+    /// same-map tolerance of `T` and its displacement direction is this one's, bit for bit.
     fn holds<T: Real>(&self, prism: &Prism<T>, side: f64) -> bool {
         let n = to_array::<T>(prism.n[0]);
         if prism.n.iter().any(|m| to_array::<T>(*m) != self.columns[2]) || n != self.columns[2] {
@@ -158,7 +172,7 @@ impl TexelFrame {
                 let b = self.columns[1][k] * y;
                 let mapped = self.origin[k] + a + b;
                 let scale = self.origin[k].abs() + a.abs() + b.abs() + p[k].abs();
-                (mapped - p[k]).abs() <= SAME_MAP * scale
+                (mapped - p[k]).abs() <= same_map::<T>() * scale
             })
         })
     }
@@ -249,6 +263,10 @@ pub(crate) struct AffinePatches<T> {
     triangles: Vec<Option<TexelTriangle<T>>>,
 }
 
+/// A base edge as patches are found: its two positions' bits (the smaller first), its
+/// triangle, the uvs' bits at those positions.
+type EdgeKey = ([[u64; 3]; 2], u32, [[u64; 2]; 2]);
+
 /// Union-find root with path halving.
 fn find(parent: &mut [u32], mut i: u32) -> u32 {
     while parent[i as usize] != i {
@@ -275,7 +293,7 @@ impl<T: Real> AffinePatches<T> {
         // Edges keyed by their two positions' bits (the smaller key first), with the uvs at
         // those positions: triangles meeting there share the edge.
         let key = |v: T::Vec3| to_array::<T>(v).map(f64::to_bits);
-        let mut edges: Vec<([[u64; 3]; 2], u32, [[u64; 2]; 2])> = Vec::with_capacity(3 * count);
+        let mut edges: Vec<EdgeKey> = Vec::with_capacity(3 * count);
         for (i, prism) in prisms.iter().enumerate() {
             for k in 0..3 {
                 let (a, b) = (k, (k + 1) % 3);
@@ -325,13 +343,53 @@ impl<T: Real> AffinePatches<T> {
             }
             start = end;
         }
-        // A patch is usable when none of its triangles is blocked and each lies in the
-        // patch's frame (its root's, the smallest index).
+        // Each patch's frame is fitted on three of its vertices that span it (the root's first
+        // corner, the vertex farthest from it in texel space, the vertex farthest from the line
+        // through both), so that rounding in one small triangle is not carried across the
+        // patch; a patch is usable when none of its triangles is blocked and each lies in that
+        // frame.
         let roots: Vec<u32> = (0..count as u32).map(|i| find(&mut parent, i)).collect();
-        let mut usable = vec![true; count];
+        let texel = |i: usize, k: usize| {
+            let uv = prisms[i].uv[k];
+            [uv.x().to_f64() * side_f, uv.y().to_f64() * side_f]
+        };
+        let mut span: Vec<[(usize, usize); 3]> = (0..count).map(|i| [(i, 0); 3]).collect();
+        let distance = |a: [f64; 2], b: [f64; 2]| (b[0] - a[0]).abs() + (b[1] - a[1]).abs();
+        for (i, &r) in roots.iter().enumerate() {
+            let r = r as usize;
+            let a = texel(r, 0);
+            for k in 0..3 {
+                let current = texel(span[r][1].0, span[r][1].1);
+                if distance(a, texel(i, k)) > distance(a, current) {
+                    span[r][1] = (i, k);
+                }
+            }
+        }
+        for (i, &r) in roots.iter().enumerate() {
+            let r = r as usize;
+            let (a, b) = (texel(r, 0), texel(span[r][1].0, span[r][1].1));
+            let area =
+                |c: [f64; 2]| ((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])).abs();
+            for k in 0..3 {
+                if area(texel(i, k)) > area(texel(span[r][2].0, span[r][2].1)) {
+                    span[r][2] = (i, k);
+                }
+            }
+        }
+        let fitted: Vec<Option<TexelFrame>> = (0..count)
+            .map(|r| {
+                if roots[r] as usize != r || frames[r].is_none() {
+                    return None;
+                }
+                let points = span[r].map(|(i, k)| to_array::<T>(prisms[i].p[k]));
+                let texels = span[r].map(|(i, k)| texel(i, k));
+                TexelFrame::of_points(points, texels, to_array::<T>(prisms[r].n[0]))
+            })
+            .collect();
+        let mut usable: Vec<bool> = fitted.iter().map(Option::is_some).collect();
         for i in 0..count {
             let r = roots[i] as usize;
-            let fits = frames[r].is_some_and(|f| f.holds(&prisms[i], side_f));
+            let fits = fitted[r].is_some_and(|f| f.holds(&prisms[i], side_f));
             if blocked[i] || !fits {
                 usable[r] = false;
             }
@@ -348,8 +406,8 @@ impl<T: Real> AffinePatches<T> {
             }
             if patch_index[r] == CURVED {
                 patch_index[r] = patch_frames.len() as u32;
-                // Usable: the root's frame exists.
-                patch_frames.extend(frames[r]);
+                // Usable: the patch's frame exists.
+                patch_frames.extend(fitted[r]);
             }
             patch_of[i] = patch_index[r];
             triangles[i] = Some(TexelTriangle::new(&prisms[i], side_t));
@@ -776,4 +834,310 @@ fn clip<T: Real>(
         bound(value, rate);
     }
     (lo <= hi).then(|| (T::from_f64(lo).max(t_min), T::from_f64(hi).min(t_max)))
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::test_util::unit_randoms;
+    use crate::{BaseMesh, DisplacedSurface, HeightField, TraversalStats, Wrap};
+    use alloc::vec::Vec;
+    use nlrt_poly::{Real, Vector2, Vector3};
+    use nlrt_shellmap::Ray;
+
+    /// A planar grid of `k x k` quads (alternating diagonals, so that base edges cross texel
+    /// diagonals), in the plane through `origin` spanned by `e1`, `e2`, with uvs an affine
+    /// function of the grid (rotated by `turn` radians, scaled by `scale`, shifted by
+    /// `shift`) and one displacement direction `n` for every vertex.
+    #[allow(clippy::too_many_arguments)]
+    fn grid<T: Real>(
+        k: usize,
+        origin: [f64; 3],
+        e1: [f64; 3],
+        e2: [f64; 3],
+        n: [f64; 3],
+        turn: f64,
+        scale: f64,
+        shift: [f64; 2],
+    ) -> BaseMesh<T> {
+        let v3 =
+            |a: [f64; 3]| T::Vec3::new(T::from_f64(a[0]), T::from_f64(a[1]), T::from_f64(a[2]));
+        let (mut positions, mut uvs) = (Vec::new(), Vec::new());
+        for j in 0..=k {
+            for i in 0..=k {
+                let (a, b) = (i as f64 / k as f64, j as f64 / k as f64);
+                positions.push(v3(core::array::from_fn(|c| {
+                    origin[c] + a * e1[c] + b * e2[c]
+                })));
+                let (c, s) = (turn.cos(), turn.sin());
+                uvs.push(T::Vec2::new(
+                    T::from_f64(scale * (c * a - s * b) + shift[0]),
+                    T::from_f64(scale * (s * a + c * b) + shift[1]),
+                ));
+            }
+        }
+        let mut triangles = Vec::new();
+        let at = |i: usize, j: usize| (j * (k + 1) + i) as u32;
+        for j in 0..k {
+            for i in 0..k {
+                let (a, b, c, d) = (at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1));
+                if (i + j) % 2 == 0 {
+                    triangles.extend([[a, b, c], [a, c, d]]);
+                } else {
+                    triangles.extend([[a, b, d], [b, c, d]]);
+                }
+            }
+        }
+        let normals = alloc::vec![v3(n); positions.len()];
+        BaseMesh::new(positions, normals, uvs, triangles).expect("a valid grid")
+    }
+
+    fn random_field(side: usize, seed: u64) -> HeightField {
+        let mut r = unit_randoms(seed);
+        let samples = (0..side * side).map(|_| (r() * 65535.0) as u16).collect();
+        HeightField::new(side, samples, Wrap::Repeat).expect("a valid map")
+    }
+
+    /// A tilted grid over a random map, displaced along a direction off its normal.
+    fn tilted_surface<T: Real>(seed: u64) -> DisplacedSurface<T> {
+        let mesh = grid::<T>(
+            3,
+            [0.3, -0.2, 0.1],
+            [1.7, 0.2, -0.1],
+            [-0.1, 0.3, 1.6],
+            [0.25, 1.0, 0.1],
+            0.4,
+            1.3,
+            [0.2, -0.7],
+        );
+        DisplacedSurface::new(mesh, random_field(16, seed), T::from_f64(0.6), T::ONE)
+            .expect("a valid surface")
+    }
+
+    /// `mesh` widened to `f64`, exactly.
+    fn widened<T: Real>(mesh: &BaseMesh<T>) -> BaseMesh<f64> {
+        BaseMesh::new(
+            mesh.positions().iter().map(|p| p.to_dvec3()).collect(),
+            mesh.normals().iter().map(|p| p.to_dvec3()).collect(),
+            mesh.uvs().iter().map(|p| p.to_dvec2()).collect(),
+            (0..mesh.triangle_count())
+                .map(|i| mesh.triangle(i))
+                .collect(),
+        )
+        .expect("a valid mesh stays valid")
+    }
+
+    /// The straight walk in `T` finds the hits of the curved walk in `f64` on the same mesh
+    /// (widened exactly) on rays from every direction at a tilted, sheared grid whose base
+    /// edges cross texel diagonals: the same hit or miss on every ray, distances within `T`'s
+    /// rounding, the same microtriangle but where a hit lies within rounding of an edge; and
+    /// brute force in `T` (every texel of every triangle, the curved test) agrees on whether
+    /// the ray hits. Returns how many rays the curved walk in `T` answers otherwise than
+    /// `f64` (hit or miss, or a distance off by more than the tolerance).
+    fn straight_walk_matches_f64<T: Real>(t_tolerance: f64) -> usize {
+        let mut surface = tilted_surface::<T>(7);
+        let wide = widened(surface.mesh());
+        let mut reference =
+            DisplacedSurface::new(wide, random_field(16, 7), 0.6, 1.0).expect("a valid surface");
+        reference.set_straight_walk(false);
+        assert_eq!(
+            surface.straight_triangles(),
+            18,
+            "every triangle of the grid"
+        );
+        let mut r = unit_randoms(11);
+        let (mut hits, mut same_part, mut curved_off) = (0, 0, 0);
+        for _ in 0..3000 {
+            // Aim at a point of the shell from a random direction.
+            let target = [0.3 + r() * 1.6, -0.2 + r() * 1.0, 0.1 + r() * 1.5];
+            let d = loop {
+                let d = [r() * 2.0 - 1.0, r() * 2.0 - 1.0, r() * 2.0 - 1.0];
+                let l = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+                if l > 0.1 && l <= 1.0 {
+                    break d.map(|c| c / l);
+                }
+            };
+            let o = core::array::from_fn::<f64, 3, _>(|c| target[c] - 3.0 * d[c]);
+            let v =
+                |a: [f64; 3]| T::Vec3::new(T::from_f64(a[0]), T::from_f64(a[1]), T::from_f64(a[2]));
+            let ray = Ray::new(v(o), v(d)).expect("a valid ray");
+            let (wide_o, wide_d) = (Vector3::to_dvec3(ray.origin), Vector3::to_dvec3(ray.dir));
+            let wide_ray: Ray<f64> = Ray::new(wide_o, wide_d).expect("a valid ray");
+            let mut stats = TraversalStats::default();
+            surface.set_straight_walk(true);
+            let straight = surface.intersect(&ray, T::ZERO, T::INFINITY, &mut stats);
+            surface.set_straight_walk(false);
+            let curved = surface.intersect(&ray, T::ZERO, T::INFINITY, &mut stats);
+            let truth = reference.intersect(&wide_ray, 0.0, f64::INFINITY, &mut stats);
+            let brute = surface.intersect_brute_force(&ray, T::ZERO, T::INFINITY);
+            assert_eq!(
+                straight.is_some(),
+                truth.is_some(),
+                "{ray:?}: {straight:?} vs {truth:?}"
+            );
+            assert_eq!(straight.is_some(), brute.is_some(), "{ray:?}");
+            let close = |a: Option<T>, b: Option<f64>| match (a, b) {
+                (Some(a), Some(b)) => (a.to_f64() - b).abs() <= t_tolerance * b,
+                (None, None) => true,
+                _ => false,
+            };
+            curved_off += usize::from(!close(curved.map(|c| c.hit.t), truth.map(|c| c.hit.t)));
+            if let (Some(s), Some(c)) = (straight, truth) {
+                hits += 1;
+                assert!(
+                    close(Some(s.hit.t), Some(c.hit.t)),
+                    "{s:?} vs {c:?}: {ray:?}"
+                );
+                same_part += usize::from(s.texel == c.texel && s.triangle == c.triangle);
+                let (ps, pc) = (s.hit.u.to_f64(), c.hit.u);
+                assert!((ps - pc).abs() < 1e-3, "u {ps} vs {pc}");
+            }
+        }
+        assert!(hits > 1000, "{hits} hits: the rays test the surface");
+        // A hit within rounding of a texel or triangle edge may be reported on either side.
+        assert!(same_part * 100 >= hits * 99, "{same_part} of {hits}");
+        curved_off
+    }
+
+    #[test]
+    fn straight_walk_matches_f64_in_f32() {
+        // Both walks in f32 (curves and cubics one way, sheared products the other): hits
+        // within a few hundred units of roundoff of each other along a ray of length ~3.
+        // The curved walk in f32 differs from f64 on a few of these rays (a nearer hit
+        // where f64 has none on that texel): the straight walk does not.
+        let curved_off = straight_walk_matches_f64::<f32>(1e-4);
+        assert!(curved_off < 10, "{curved_off}");
+    }
+
+    #[test]
+    fn straight_walk_matches_f64_in_f64() {
+        assert_eq!(straight_walk_matches_f64::<f64>(1e-10), 0);
+    }
+
+    /// Rays aimed at points exactly on the base edges between triangles (and on texel
+    /// corners there), from above and at a slant: every one hits, in f32 and f64.
+    fn base_edges_do_not_leak<T: Real>() {
+        let surface = tilted_surface::<T>(3);
+        let mesh = surface.mesh();
+        let mut r = unit_randoms(5);
+        let mut rays = 0;
+        for tri in (0..mesh.triangle_count()).map(|i| mesh.triangle(i)) {
+            for k in 0..3 {
+                let (a, b) = (tri[k] as usize, tri[(k + 1) % 3] as usize);
+                for _ in 0..40 {
+                    let s = r();
+                    let p = |v: T::Vec3| [v.x().to_f64(), v.y().to_f64(), v.z().to_f64()];
+                    let (pa, pb) = (p(mesh.positions()[a]), p(mesh.positions()[b]));
+                    // A point on the edge, raised into the shell along the direction.
+                    let lift = 0.6 * r();
+                    let n = p(mesh.normals()[a]);
+                    let target: [f64; 3] =
+                        core::array::from_fn(|c| pa[c] + s * (pb[c] - pa[c]) + lift * n[c]);
+                    // From the side the directions point to: down through the shell's top.
+                    let tilt = [r() - 0.5, r() - 0.5, r() - 0.5];
+                    let d: [f64; 3] = core::array::from_fn(|c| -n[c] + 0.5 * tilt[c]);
+                    let o: [f64; 3] = core::array::from_fn(|c| target[c] - 4.0 * d[c]);
+                    let v = |a: [f64; 3]| {
+                        T::Vec3::new(T::from_f64(a[0]), T::from_f64(a[1]), T::from_f64(a[2]))
+                    };
+                    let ray = Ray::new(v(o), v(d)).expect("a valid ray");
+                    let hit = surface.intersect(
+                        &ray,
+                        T::ZERO,
+                        T::INFINITY,
+                        &mut TraversalStats::default(),
+                    );
+                    // Inside the mesh's interior the ray must meet the surface (it enters the
+                    // shell's top and reaches the base); at the border it may pass beside.
+                    let brute = surface.intersect_brute_force(&ray, T::ZERO, T::INFINITY);
+                    if brute.is_some() {
+                        rays += 1;
+                        assert!(hit.is_some(), "{ray:?} leaked");
+                    }
+                }
+            }
+        }
+        assert!(rays > 1500, "{rays}");
+    }
+
+    #[test]
+    fn base_edges_do_not_leak_f32() {
+        base_edges_do_not_leak::<f32>();
+    }
+
+    #[test]
+    fn base_edges_do_not_leak_f64() {
+        base_edges_do_not_leak::<f64>();
+    }
+
+    /// Which triangles are walked straight: a flat grid all; a grid whose directions differ
+    /// in one vertex, one folded along an edge, or one with a uv seam inside: none (every
+    /// triangle of a patch that touches a curved or foreign neighbour keeps the curved walk);
+    /// a flat grid beside a curved one in the same mesh: the flat one only.
+    #[test]
+    fn affine_patches_are_whole_flat_parts_of_the_mesh() {
+        let flat = grid::<f64>(
+            2,
+            [0.0; 3],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0],
+            0.0,
+            1.0,
+            [0.0; 2],
+        );
+        let field = || random_field(8, 1);
+        let build = |m: BaseMesh<f64>| DisplacedSurface::new(m, field(), 0.2, 1.0).expect("valid");
+        assert_eq!(build(flat.clone()).straight_triangles(), 8);
+
+        let mut normals = flat.normals().to_vec();
+        normals[4] = nlrt_poly::glam::DVec3::new(0.0, 0.1, 1.0);
+        let bent = BaseMesh::new(
+            flat.positions().to_vec(),
+            normals,
+            flat.uvs().to_vec(),
+            (0..flat.triangle_count())
+                .map(|i| flat.triangle(i))
+                .collect::<Vec<_>>(),
+        )
+        .expect("valid");
+        assert_eq!(build(bent).straight_triangles(), 0);
+
+        let mut positions = flat.positions().to_vec();
+        for p in positions.iter_mut().filter(|p| p.x > 0.75) {
+            p.z += 0.3 * (p.x - 0.5);
+        }
+        let folded = BaseMesh::new(
+            positions,
+            flat.normals().to_vec(),
+            flat.uvs().to_vec(),
+            (0..flat.triangle_count())
+                .map(|i| flat.triangle(i))
+                .collect::<Vec<_>>(),
+        )
+        .expect("valid");
+        assert_eq!(build(folded).straight_triangles(), 0);
+
+        // Two copies side by side, the second with its own vertices and bent directions.
+        let mut positions = flat.positions().to_vec();
+        let mut normals = flat.normals().to_vec();
+        let mut uvs = flat.uvs().to_vec();
+        let mut triangles = (0..flat.triangle_count())
+            .map(|i| flat.triangle(i))
+            .collect::<Vec<_>>();
+        let base = positions.len() as u32;
+        positions.extend(
+            flat.positions()
+                .iter()
+                .map(|p| *p + nlrt_poly::glam::DVec3::new(3.0, 0.0, 0.0)),
+        );
+        normals.extend(
+            flat.positions()
+                .iter()
+                .map(|p| nlrt_poly::glam::DVec3::new(p.x * 0.2, 0.0, 1.0)),
+        );
+        uvs.extend(flat.uvs().iter().copied());
+        triangles.extend((0..flat.triangle_count()).map(|i| flat.triangle(i).map(|v| v + base)));
+        let both = BaseMesh::new(positions, normals, uvs, triangles).expect("valid");
+        assert_eq!(build(both).straight_triangles(), 8);
+    }
 }
