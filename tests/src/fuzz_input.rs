@@ -351,15 +351,24 @@ pub fn displacement_parts<T: Real>(
 
 /// The displacement traversal target: a small height map (side 2 to 16, any samples, either
 /// wrap mode, tiling 1 to 4), one base triangle and a ray, all from raw bytes. No panic; a hit
-/// is finite, in `[0, inf)`, with `h` in `[0, 1]` and `(alpha, beta)` in the base triangle;
-/// and the accelerated hit is never nearer than the brute-force one (the traversal tests a
+/// is finite, in `[0, inf)`, with `h` in `[0, 1]` and `(alpha, beta)` in the base triangle,
+/// from the straight walk (a base triangle with three equal directions) and the curved one;
+/// and the curved walk's hit is never nearer than the brute-force one (the traversal tests a
 /// subset of the same texels with the same arithmetic), checked when the texel range is small.
 pub fn fuzz_displacement<T: Real>(data: &[u8]) {
     use nlrt_accel::TraversalStats;
     use nlrt_baselines::{AffineTracing, ConeTraced, Marching};
-    let Ok((surface, ray)) = displacement_case::<T>(data) else {
+    let Ok((mut surface, ray)) = displacement_case::<T>(data) else {
         return;
     };
+    if surface.straight_triangles() > 0 {
+        let straight =
+            surface.intersect(&ray, T::ZERO, T::INFINITY, &mut TraversalStats::default());
+        if let Some(hit) = straight {
+            check_traversal_hit(&hit.hit, &hit);
+        }
+    }
+    surface.set_straight_walk(false);
     let fast = surface.intersect(&ray, T::ZERO, T::INFINITY, &mut TraversalStats::default());
     if let Some(hit) = fast {
         check_traversal_hit(&hit.hit, &hit);

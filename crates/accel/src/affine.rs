@@ -187,7 +187,7 @@ pub(crate) struct TexelTriangle<T> {
     /// `(x, y)` first) and whether the triangle lies where the edge function is positive.
     edges: [([T; 2], [T; 2], bool); 3],
     /// Rows of the map from `(x, y) - corners[0]` to `(alpha, beta)`.
-    to_canonical: [[T; 2]; 2],
+    to_canonical: [[f64; 2]; 2],
 }
 
 /// The edge function of `(a, b)` at `q`, with plain products: the same number for the same
@@ -223,10 +223,7 @@ impl<T: Real> TexelTriangle<T> {
             [wide[2][0] - wide[0][0], wide[2][1] - wide[0][1]],
         );
         let det = e1[0] * e2[1] - e2[0] * e1[1];
-        let to_canonical = [
-            [T::from_f64(e2[1] / det), T::from_f64(-e2[0] / det)],
-            [T::from_f64(-e1[1] / det), T::from_f64(e1[0] / det)],
-        ];
+        let to_canonical = [[e2[1] / det, -e2[0] / det], [-e1[1] / det, e1[0] / det]];
         Self {
             corners,
             edges,
@@ -243,14 +240,22 @@ impl<T: Real> TexelTriangle<T> {
         })
     }
 
-    /// `(alpha, beta)` of the texel point `q`, moved onto the triangle.
+    /// `(alpha, beta)` of the texel point `q`, moved onto the triangle: computed in `f64`
+    /// (once per hit), where a thin uv triangle's inverse does not overflow as it may in
+    /// `f32`; a coordinate that is still not finite (a uv triangle thinner than `f64` sees) is
+    /// taken as 0.
     fn canonical(&self, q: [T; 2]) -> (T, T) {
-        let d = [q[0] - self.corners[0][0], q[1] - self.corners[0][1]];
+        let c = self.corners[0];
+        let d = [q[0].to_f64() - c[0].to_f64(), q[1].to_f64() - c[1].to_f64()];
         let m = &self.to_canonical;
-        onto_base_triangle(
-            m[0][0].mul_add(d[0], m[0][1] * d[1]),
-            m[1][0].mul_add(d[0], m[1][1] * d[1]),
-        )
+        let finite = |v: f64| if v.is_finite() { v } else { 0.0 };
+        let (alpha, beta) = onto_base_triangle(
+            finite(m[0][0] * d[0] + m[0][1] * d[1]),
+            finite(m[1][0] * d[0] + m[1][1] * d[1]),
+        );
+        let (alpha, beta) = (T::from_f64(alpha), T::from_f64(beta));
+        // Rounding to `T` may carry the sum 1 ulp past 1.
+        onto_base_triangle(alpha, beta)
     }
 }
 
@@ -628,36 +633,76 @@ impl<T: Real> Walk<'_, T> {
         best
     }
 
-    /// The `t` interval of the line in node `(x, y)` of `level` (padded), within `[lo, hi]`,
-    /// when its heights there may meet the node's `bounds`.
+    /// The `t` intervals of the line in the four children of node `(x, y)` of `level >= 1`
+    /// (in the order `(0, 0), (1, 0), (0, 1), (1, 1)`), each padded, within `[lo, hi]`: the
+    /// two split lines' crossings computed once for all four.
     #[inline]
-    fn child(&self, level: u32, x: i32, y: i32, bounds: [u16; 2], lo: T, hi: T) -> Option<(T, T)> {
-        let size = T::pow2(level as i32);
-        let (x0, y0) = (T::from_i32(x) * size, T::from_i32(y) * size);
+    fn children(&self, level: u32, x: i32, y: i32, lo: T, hi: T) -> [(T, T); 4] {
+        let size = T::pow2(level as i32 - 1);
         let l = &self.line;
-        let (ax, bx) = slab(
-            x0 - self.pad_xy,
-            x0 + size + self.pad_xy,
-            l.origin[0],
-            l.dir[0],
-            l.inv[0],
-        );
-        let (ay, by) = slab(
-            y0 - self.pad_xy,
-            y0 + size + self.pad_xy,
-            l.origin[1],
-            l.dir[1],
-            l.inv[1],
-        );
-        let (t_in, t_out) = (ax.max(ay).max(lo), bx.min(by).min(hi));
+        let p = self.pad_xy;
+        let axis = |a: usize, c: i32| -> [(T, T); 2] {
+            let c0 = T::from_i32(c) * (size + size);
+            let (cm, c1) = (c0 + size, c0 + size + size);
+            if l.dir[a] == T::ZERO {
+                let o = l.origin[a];
+                let inside = |lo: T, hi: T| {
+                    if o >= lo && o <= hi {
+                        (-T::INFINITY, T::INFINITY)
+                    } else {
+                        (T::INFINITY, -T::INFINITY)
+                    }
+                };
+                return [inside(c0 - p, cm + p), inside(cm - p, c1 + p)];
+            }
+            let t = |v: T| (v - l.origin[a]) * l.inv[a];
+            let (a0, a1, b0, b1) = (t(c0 - p), t(cm + p), t(cm - p), t(c1 + p));
+            [(a0.min(a1), a0.max(a1)), (b0.min(b1), b0.max(b1))]
+        };
+        let (sx, sy) = (axis(0, x), axis(1, y));
+        core::array::from_fn(|k| {
+            let (i, j) = (k & 1, k >> 1);
+            (sx[i].0.max(sy[j].0).max(lo), sx[i].1.min(sy[j].1).min(hi))
+        })
+    }
+
+    /// The `t` interval of the line in node `(x, y)` of `level` (padded), within `[lo, hi]`.
+    fn node(&self, level: u32, x: i32, y: i32, lo: T, hi: T) -> (T, T) {
+        let size = T::pow2(level as i32);
+        let l = &self.line;
+        let p = self.pad_xy;
+        let (x0, y0) = (T::from_i32(x) * size, T::from_i32(y) * size);
+        let (ax, bx) = slab(x0 - p, x0 + size + p, l.origin[0], l.dir[0], l.inv[0]);
+        let (ay, by) = slab(y0 - p, y0 + size + p, l.origin[1], l.dir[1], l.inv[1]);
+        (ax.max(ay).max(lo), bx.min(by).min(hi))
+    }
+
+    /// Whether the line's heights over the nonempty interval `(t_in, t_out)` (padded) may
+    /// meet a node's `bounds`.
+    #[inline]
+    fn meets(&self, (t_in, t_out): (T, T), bounds: [u16; 2]) -> bool {
         if !(t_in <= t_out) {
-            return None;
+            return false;
         }
+        let l = &self.line;
         let ha = t_in.mul_add(l.dir[2], l.origin[2]);
         let hb = t_out.mul_add(l.dir[2], l.origin[2]);
         let (line_lo, line_hi) = (ha.min(hb) - self.pad_h, ha.max(hb) + self.pad_h);
-        (line_lo <= height::<T>(bounds[1]) && line_hi >= height::<T>(bounds[0]))
-            .then_some((t_in, t_out))
+        line_lo <= height::<T>(bounds[1]) && line_hi >= height::<T>(bounds[0])
+    }
+}
+
+/// Up to four `(t_in, t_out, x, y)` sorted by `t_in`, farthest first (`descending`) or
+/// nearest first.
+#[inline]
+fn sort_entries<T: Real>(entries: &mut [(T, T, i32, i32)], descending: bool) {
+    // An insertion sort: at most four entries.
+    for i in 1..entries.len() {
+        let mut j = i;
+        while j > 0 && ((entries[j].0 > entries[j - 1].0) == descending) {
+            entries.swap(j, j - 1);
+            j -= 1;
+        }
     }
 }
 
@@ -718,63 +763,105 @@ pub(crate) fn walk_straight<T: Real>(
     let mut t_best = t_hi;
     let mut stack = [Node::<T>::default(); STACK];
     let mut top = 0;
+    let mut entries = [(T::ZERO, T::ZERO, 0i32, 0i32); 4];
+    let mut n = 0;
     for j in 0..i32::from(roots.ny) {
         for i in 0..i32::from(roots.nx) {
             let (x, y) = (roots.x + i, roots.y + j);
             stats.box_tests += 1;
             let bounds = field.texel_bounds(roots.level, i64::from(x), i64::from(y));
-            if let Some((t_in, t_out)) = walk.child(roots.level, x, y, bounds, t_lo, t_hi) {
-                stack[top] = Node {
-                    level: roots.level,
-                    x,
-                    y,
-                    t_in,
-                    t_out,
-                };
-                top += 1;
+            let interval = walk.node(roots.level, x, y, t_lo, t_hi);
+            if walk.meets(interval, bounds) {
+                entries[n] = (interval.0, interval.1, x, y);
+                n += 1;
             }
         }
     }
-    // Roots nearest last (popped first).
-    stack[..top].sort_unstable_by(|a, b| {
-        b.t_in
-            .partial_cmp(&a.t_in)
-            .unwrap_or(core::cmp::Ordering::Equal)
-    });
-    while top > 0 {
-        top -= 1;
-        let node = stack[top];
-        if node.t_in > t_best {
-            continue;
-        }
-        if node.level == 0 {
+    sort_entries(&mut entries[..n], true);
+    for &(t_in, t_out, x, y) in &entries[..n] {
+        stack[top] = Node {
+            level: roots.level,
+            x,
+            y,
+            t_in,
+            t_out,
+        };
+        top += 1;
+    }
+    if roots.level == 0 {
+        // A triangle within one texel (or two): its roots are texels.
+        while top > 0 {
+            top -= 1;
+            let node = stack[top];
             stats.texel_tests += 1;
             let corners = field.texel_corners(i64::from(node.x), i64::from(node.y));
             if let Some(hit) = walk.texel(node.x, node.y, corners, t_best) {
                 t_best = hit.hit.t;
                 best = Some(hit);
             }
+        }
+        top = 0;
+    }
+    while top > 0 {
+        top -= 1;
+        let node = stack[top];
+        if node.t_in > t_best {
+            continue;
+        }
+        let intervals = walk.children(
+            node.level,
+            node.x,
+            node.y,
+            node.t_in,
+            node.t_out.min(t_best),
+        );
+        stats.box_tests += 4;
+        let mut n = 0;
+        if node.level == 1 {
+            // The four texels, from the node's 3 x 3 samples read once, nearest first.
+            let s = field.samples_3x3(2 * i64::from(node.x), 2 * i64::from(node.y));
+            let corners = |k: usize| {
+                let (i, j) = (k & 1, k >> 1);
+                [s[j][i], s[j][i + 1], s[j + 1][i], s[j + 1][i + 1]]
+            };
+            for (k, &interval) in intervals.iter().enumerate() {
+                let c = corners(k);
+                let bounds = [
+                    c[0].min(c[1]).min(c[2]).min(c[3]),
+                    c[0].max(c[1]).max(c[2]).max(c[3]),
+                ];
+                if walk.meets(interval, bounds) {
+                    entries[n] = (interval.0, interval.1, k as i32, 0);
+                    n += 1;
+                }
+            }
+            sort_entries(&mut entries[..n], false);
+            for &(t_in, _, k, _) in &entries[..n] {
+                if t_in > t_best {
+                    break;
+                }
+                let k = k as usize;
+                let (x, y) = (2 * node.x + (k & 1) as i32, 2 * node.y + (k >> 1) as i32);
+                stats.texel_tests += 1;
+                if let Some(hit) = walk.texel(x, y, corners(k), t_best) {
+                    t_best = hit.hit.t;
+                    best = Some(hit);
+                }
+            }
             continue;
         }
         let level = node.level - 1;
-        let mut children = [(T::ZERO, 0i32, 0i32, T::ZERO); 4];
-        let mut n = 0;
-        for (i, j) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
-            let (x, y) = (2 * node.x + i, 2 * node.y + j);
-            stats.box_tests += 1;
+        for (k, &interval) in intervals.iter().enumerate() {
+            let (x, y) = (2 * node.x + (k & 1) as i32, 2 * node.y + (k >> 1) as i32);
             let bounds = field.texel_bounds(level, i64::from(x), i64::from(y));
-            if let Some((t_in, t_out)) =
-                walk.child(level, x, y, bounds, node.t_in, node.t_out.min(t_best))
-            {
-                children[n] = (t_in, x, y, t_out);
+            if walk.meets(interval, bounds) {
+                entries[n] = (interval.0, interval.1, x, y);
                 n += 1;
             }
         }
         // Farthest first onto the stack: the nearest child is popped next.
-        let children = &mut children[..n];
-        children
-            .sort_unstable_by(|a, b| b.0.partial_cmp(&a.0).unwrap_or(core::cmp::Ordering::Equal));
-        for &(t_in, x, y, t_out) in children.iter() {
+        sort_entries(&mut entries[..n], true);
+        for &(t_in, t_out, x, y) in &entries[..n] {
             stack[top] = Node {
                 level,
                 x,

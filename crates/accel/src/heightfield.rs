@@ -223,6 +223,18 @@ impl HeightField {
         (height, lower.max(upper))
     }
 
+    /// The 3 x 3 samples at corners `(i0 + i, j0 + j)`, by rows `j` (a node of level 1 at
+    /// `(i0 / 2, j0 / 2)`: its four texels' corners), each row and column wrapped once.
+    #[must_use]
+    #[inline]
+    pub(crate) fn samples_3x3(&self, i0: i64, j0: i64) -> [[u16; 3]; 3] {
+        let columns = [i0, i0 + 1, i0 + 2].map(|i| self.wrap_index(i));
+        core::array::from_fn(|j| {
+            let row = &self.samples[self.wrap_index(j0 + j as i64) * self.side..][..self.side];
+            columns.map(|i| row[i])
+        })
+    }
+
     /// `(min, max)` sample over the node `(x, y)` of `level` (any integers: the grid is
     /// infinite and wraps). Levels above the top cover several tiles and get the whole map's
     /// range (with [`Wrap::Clamp`] a node outside the tile still reads edge samples, inside
@@ -238,15 +250,9 @@ impl HeightField {
                 ]
             }
             1 => {
-                // The 3 x 3 corner samples of the node's 2 x 2 texels, each row and column
-                // wrapped once (not once per sample).
-                let (i0, j0) = (2 * x, 2 * y);
-                let columns = [i0, i0 + 1, i0 + 2].map(|i| self.wrap_index(i));
                 let mut b = [u16::MAX, 0];
-                for j in j0..=j0 + 2 {
-                    let row = &self.samples[self.wrap_index(j) * self.side..][..self.side];
-                    for &i in &columns {
-                        let s = row[i];
+                for row in self.samples_3x3(2 * x, 2 * y) {
+                    for s in row {
                         b = [b[0].min(s), b[1].max(s)];
                     }
                 }
