@@ -8,7 +8,8 @@
 //! the bench's; height 3/4 of it) and `f32` or `f64` to trace in that precision alone (for a
 //! profile; default both). The stream is recorded by a render with nonlinear
 //! `f32` (1 spp, one bounce, as the bench), then traced one ray at a time on this thread by
-//! the `f32` and the `f64` surface, each kind of ray in turn, interleaved over `ROUNDS`
+//! the `f32` and the `f64` surface (and, where the scene has affine patches, both again with
+//! the curved walk on every prism), each kind of ray in turn, interleaved over `ROUNDS`
 //! rounds; the time printed is each kind's median over the rounds.
 
 use nlrt_accel::TraversalStats;
@@ -74,9 +75,45 @@ fn main() {
         spp: 1,
         bounces: 1,
     };
-    let narrow = Nonlinear::<f32>::new(&scene);
-    let wide = Nonlinear::<f64>::new(&scene);
+    let mut narrow = Nonlinear::<f32>::new(&scene);
     let (_, stream) = render_recording(&scene, &narrow, &opts);
+    // The curved walk on every prism beside the default (the straight walk on affine
+    // patches), where the scene has affine patches.
+    let straight = match &mut narrow {
+        Nonlinear::Displaced(s) => s.straight_triangles(),
+        Nonlinear::Shell(_) => 0,
+    };
+    let curved = |mut nl: Nonlinear<f32>| {
+        if let Nonlinear::Displaced(s) = &mut nl {
+            s.set_straight_walk(false);
+        }
+        nl
+    };
+    let curved_wide = |mut nl: Nonlinear<f64>| {
+        if let Nonlinear::Displaced(s) = &mut nl {
+            s.set_straight_walk(false);
+        }
+        nl
+    };
+    let variants: Vec<(&str, Variant)> = [
+        (only != Some(1)).then(|| ("f32", Variant::Narrow(narrow))),
+        (only != Some(0)).then(|| ("f64", Variant::Wide(Nonlinear::<f64>::new(&scene)))),
+        (straight > 0 && only != Some(1)).then(|| {
+            (
+                "f32 curved",
+                Variant::Narrow(curved(Nonlinear::<f32>::new(&scene))),
+            )
+        }),
+        (straight > 0 && only != Some(0)).then(|| {
+            (
+                "f64 curved",
+                Variant::Wide(curved_wide(Nonlinear::<f64>::new(&scene))),
+            )
+        }),
+    ]
+    .into_iter()
+    .flatten()
+    .collect();
     let kinds = [
         ("primary", RayKind::Primary),
         ("shadow", RayKind::Shadow),
@@ -91,61 +128,70 @@ fn main() {
             .collect()
     };
     println!(
-        "{name} ({}), stream of {} rays, one thread, medians of {ROUNDS} rounds",
+        "{name} ({}), stream of {} rays, one thread, medians of {ROUNDS} rounds, {straight} base triangles walked straight",
         args.get(2).map_or("small", String::as_str),
         stream.len()
     );
     println!(
-        "kind | rays | hits | us per ray f32 | f64 | f32 / f64 speed | per ray: prisms | nodes | texel tests | prisms in f64"
+        "kind | variant | rays | hits | us per ray | speed against the first | per ray: prisms | nodes | texel tests | prisms in f64"
     );
-    let mut total = [0.0; 2];
+    let mut total = vec![0.0; variants.len()];
     for (label, kind) in kinds {
         let rays = rays_of(kind);
         if rays.is_empty() {
             continue;
         }
-        let mut seconds = [Vec::new(), Vec::new()];
-        let mut result = None;
+        let mut seconds = vec![Vec::new(); variants.len()];
+        let mut results = vec![None; variants.len()];
         for _ in 0..ROUNDS {
-            if only != Some(1) {
+            for (i, (_, variant)) in variants.iter().enumerate() {
                 let t = Instant::now();
-                result = Some(trace_stream(&narrow, &rays));
-                seconds[0].push(t.elapsed().as_secs_f64());
-            }
-            if only != Some(0) {
-                let t = Instant::now();
-                let wide_result = trace_stream(&wide, &rays);
-                seconds[1].push(t.elapsed().as_secs_f64());
-                result = result.or(Some(wide_result));
+                results[i] = Some(variant.trace(&rays));
+                seconds[i].push(t.elapsed().as_secs_f64());
             }
         }
-        let Some((hits, st)) = result else {
-            continue;
-        };
-        let [s32, s64] = seconds.map(median);
-        total[0] += s32;
-        total[1] += s64;
+        let medians: Vec<f64> = seconds.into_iter().map(median).collect();
         let n = rays.len() as f64;
-        println!(
-            "{label} | {} | {hits} | {:.3} | {:.3} | {:.2} | {:.2} | {:.2} | {:.2} | {:.4}",
-            rays.len(),
-            s32 / n * 1e6,
-            s64 / n * 1e6,
-            s64 / s32,
-            f64::from(st.prism_tests) / n,
-            f64::from(st.box_tests) / n,
-            f64::from(st.texel_tests) / n,
-            f64::from(st.f64_prisms) / n,
-        );
+        for (i, (variant, _)) in variants.iter().enumerate() {
+            let Some((hits, st)) = results[i] else {
+                continue;
+            };
+            total[i] += medians[i];
+            println!(
+                "{label} | {variant} | {} | {hits} | {:.3} | {:.2} | {:.2} | {:.2} | {:.2} | {:.4}",
+                rays.len(),
+                medians[i] / n * 1e6,
+                medians[0] / medians[i],
+                f64::from(st.prism_tests) / n,
+                f64::from(st.box_tests) / n,
+                f64::from(st.texel_tests) / n,
+                f64::from(st.f64_prisms) / n,
+            );
+        }
     }
     let n = stream.len() as f64;
-    println!(
-        "all | {} | | {:.3} | {:.3} | {:.2} | Mrays/s f32 {:.3}, f64 {:.3}",
-        stream.len(),
-        total[0] / n * 1e6,
-        total[1] / n * 1e6,
-        total[1] / total[0],
-        n / total[0] / 1e6,
-        n / total[1] / 1e6
-    );
+    for (i, (variant, _)) in variants.iter().enumerate() {
+        println!(
+            "all | {variant} | {} | | {:.3} | {:.2} | Mrays/s {:.3}",
+            stream.len(),
+            total[i] / n * 1e6,
+            total[0] / total[i],
+            n / total[i] / 1e6,
+        );
+    }
+}
+
+/// A surface in one of the two precisions.
+enum Variant {
+    Narrow(Nonlinear<f32>),
+    Wide(Nonlinear<f64>),
+}
+
+impl Variant {
+    fn trace(&self, rays: &[StreamRay]) -> (u64, TraversalStats) {
+        match self {
+            Variant::Narrow(nl) => trace_stream(nl, rays),
+            Variant::Wide(nl) => trace_stream(nl, rays),
+        }
+    }
 }
