@@ -96,7 +96,7 @@ fn main() {
         nl
     };
     let variants: Vec<(&str, Variant)> = [
-        (only != Some(1)).then(|| ("f32", Variant::Narrow(narrow))),
+        (only != Some(1)).then_some(("f32", Variant::Narrow(narrow))),
         (only != Some(0)).then(|| ("f64", Variant::Wide(Nonlinear::<f64>::new(&scene)))),
         (straight > 0 && only != Some(1)).then(|| {
             (
