@@ -17,7 +17,7 @@
 //!   those numbers, so the two microtriangles that share an edge compute exactly negated
 //!   values for it: a ray cannot pass between them.
 //! - The walk never loses a texel the test would hit: node boxes are padded by a bound on the
-//!   test's rounding ([`StraightLine::pad_xy`], [`StraightLine::pad_h`]).
+//!   test's rounding (the walk's paddings, set per prism from the line's reach).
 //! - Between base triangles: triangles whose affine maps agree are grouped into a patch traced
 //!   in one frame, so all of them see the same line, bit for bit, and the same hit points; a
 //!   hit belongs to the triangles whose texel-space edges it lies on or inside, each edge's
@@ -512,7 +512,12 @@ struct Walk<'a, T: Real> {
     axes: [usize; 3],
     shear: [T; 3],
     pad_xy: T,
-    pad_h: T,
+    /// The line's height at `t` in sample units (`65535` per unit height): `origin + t dir`,
+    /// so that node bounds are compared as stored, without a division.
+    sample_origin: T,
+    sample_dir: T,
+    /// The padding of the line's heights, in sample units.
+    pad_samples: T,
     t_min: T,
 }
 
@@ -633,6 +638,63 @@ impl<T: Real> Walk<'_, T> {
         best
     }
 
+    /// The nearest owned hit in the four texels of node `(x, y)` of level 1, whose line
+    /// interval is `interval`: their corners are `block[at[1] + j][at[0] + i]`, `i, j` in
+    /// `0..3`; texels nearest first, until one lies beyond `t_max`.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn level_one<const N: usize>(
+        &self,
+        block: &[[u16; N]; N],
+        at: [usize; 2],
+        x: i32,
+        y: i32,
+        interval: (T, T),
+        t_max: T,
+        stats: &mut TraversalStats,
+    ) -> Option<StraightHit<T>> {
+        let intervals = self.children(1, x, y, interval.0, lesser(interval.1, t_max));
+        stats.box_tests += 4;
+        let corners = |k: usize| {
+            let (i, j) = (at[0] + (k & 1), at[1] + (k >> 1));
+            [
+                block[j][i],
+                block[j][i + 1],
+                block[j + 1][i],
+                block[j + 1][i + 1],
+            ]
+        };
+        let mut entries = [(T::ZERO, T::ZERO, 0i32, 0i32); 4];
+        let mut n = 0;
+        for (k, &interval) in intervals.iter().enumerate() {
+            let c = corners(k);
+            let bounds = [
+                c[0].min(c[1]).min(c[2]).min(c[3]),
+                c[0].max(c[1]).max(c[2]).max(c[3]),
+            ];
+            if self.meets(interval, bounds) {
+                entries[n] = (interval.0, interval.1, k as i32, 0);
+                n += 1;
+            }
+        }
+        sort_entries(&mut entries[..n], false);
+        let mut best = None;
+        let mut t_max = t_max;
+        for &(t_in, _, k, _) in &entries[..n] {
+            if t_in > t_max {
+                break;
+            }
+            let k = k as usize;
+            let (tx, ty) = (2 * x + (k & 1) as i32, 2 * y + (k >> 1) as i32);
+            stats.texel_tests += 1;
+            if let Some(hit) = self.texel(tx, ty, corners(k), t_max) {
+                t_max = hit.hit.t;
+                best = Some(hit);
+            }
+        }
+        best
+    }
+
     /// The `t` intervals of the line in the four children of node `(x, y)` of `level >= 1`
     /// (in the order `(0, 0), (1, 0), (0, 1), (1, 1)`), each padded, within `[lo, hi]`: the
     /// two split lines' crossings computed once for all four.
@@ -657,12 +719,18 @@ impl<T: Real> Walk<'_, T> {
             }
             let t = |v: T| (v - l.origin[a]) * l.inv[a];
             let (a0, a1, b0, b1) = (t(c0 - p), t(cm + p), t(cm - p), t(c1 + p));
-            [(a0.min(a1), a0.max(a1)), (b0.min(b1), b0.max(b1))]
+            [
+                (lesser(a0, a1), greater(a0, a1)),
+                (lesser(b0, b1), greater(b0, b1)),
+            ]
         };
         let (sx, sy) = (axis(0, x), axis(1, y));
         core::array::from_fn(|k| {
             let (i, j) = (k & 1, k >> 1);
-            (sx[i].0.max(sy[j].0).max(lo), sx[i].1.min(sy[j].1).min(hi))
+            (
+                greater(greater(sx[i].0, sy[j].0), lo),
+                lesser(lesser(sx[i].1, sy[j].1), hi),
+            )
         })
     }
 
@@ -679,17 +747,32 @@ impl<T: Real> Walk<'_, T> {
 
     /// Whether the line's heights over the nonempty interval `(t_in, t_out)` (padded) may
     /// meet a node's `bounds`.
-    #[inline]
+    #[inline(always)]
     fn meets(&self, (t_in, t_out): (T, T), bounds: [u16; 2]) -> bool {
         if !(t_in <= t_out) {
             return false;
         }
-        let l = &self.line;
-        let ha = t_in.mul_add(l.dir[2], l.origin[2]);
-        let hb = t_out.mul_add(l.dir[2], l.origin[2]);
-        let (line_lo, line_hi) = (ha.min(hb) - self.pad_h, ha.max(hb) + self.pad_h);
-        line_lo <= height::<T>(bounds[1]) && line_hi >= height::<T>(bounds[0])
+        let ha = t_in.mul_add(self.sample_dir, self.sample_origin);
+        let hb = t_out.mul_add(self.sample_dir, self.sample_origin);
+        let (line_lo, line_hi) = (
+            lesser(ha, hb) - self.pad_samples,
+            greater(ha, hb) + self.pad_samples,
+        );
+        line_lo <= T::from_i32(i32::from(bounds[1])) && line_hi >= T::from_i32(i32::from(bounds[0]))
     }
+}
+
+/// The smaller of two numbers that are not NaN (one comparison: the walk's `t` and heights
+/// never are NaN, so `Real::min`'s NaN handling is not paid for).
+#[inline(always)]
+fn lesser<T: Real>(a: T, b: T) -> T {
+    if a < b { a } else { b }
+}
+
+/// The larger of two numbers that are not NaN (see [`lesser`]).
+#[inline(always)]
+fn greater<T: Real>(a: T, b: T) -> T {
+    if a > b { a } else { b }
 }
 
 /// Up to four `(t_in, t_out, x, y)` sorted by `t_in`, farthest first (`descending`) or
@@ -750,13 +833,19 @@ pub(crate) fn walk_straight<T: Real>(
     let eight = T::from_i32(8);
     let pad_xy = eight * eps * (reach(0).max(reach(1)) + corner + T::ONE);
     let pad_h = eight * eps * (reach(2) + T::ONE);
+    // Heights in sample units: the scaling rounds the origin and direction once more each
+    // (two roundings on magnitudes up to the reach).
+    let samples = T::from_i32(i32::from(HEIGHT_ONE));
+    let pad_samples = samples * (pad_h + T::TWO * eps * (reach(2) + T::ONE));
     let walk = Walk {
         line,
         triangle,
         axes: [kx, ky, kz],
         shear,
         pad_xy,
-        pad_h,
+        sample_origin: line.origin[2] * samples,
+        sample_dir: line.dir[2] * samples,
+        pad_samples,
         t_min,
     };
     let mut best: Option<StraightHit<T>> = None;
@@ -788,88 +877,102 @@ pub(crate) fn walk_straight<T: Real>(
         };
         top += 1;
     }
-    if roots.level == 0 {
-        // A triangle within one texel (or two): its roots are texels.
-        while top > 0 {
-            top -= 1;
-            let node = stack[top];
-            stats.texel_tests += 1;
-            let corners = field.texel_corners(i64::from(node.x), i64::from(node.y));
-            if let Some(hit) = walk.texel(node.x, node.y, corners, t_best) {
-                t_best = hit.hit.t;
-                best = Some(hit);
-            }
-        }
-        top = 0;
-    }
     while top > 0 {
         top -= 1;
         let node = stack[top];
         if node.t_in > t_best {
             continue;
         }
-        let intervals = walk.children(
-            node.level,
-            node.x,
-            node.y,
-            node.t_in,
-            node.t_out.min(t_best),
-        );
-        stats.box_tests += 4;
-        let mut n = 0;
-        if node.level == 1 {
-            // The four texels, from the node's 3 x 3 samples read once, nearest first.
-            let s = field.samples_3x3(2 * i64::from(node.x), 2 * i64::from(node.y));
-            let corners = |k: usize| {
-                let (i, j) = (k & 1, k >> 1);
-                [s[j][i], s[j][i + 1], s[j + 1][i], s[j + 1][i + 1]]
-            };
-            for (k, &interval) in intervals.iter().enumerate() {
-                let c = corners(k);
-                let bounds = [
-                    c[0].min(c[1]).min(c[2]).min(c[3]),
-                    c[0].max(c[1]).max(c[2]).max(c[3]),
-                ];
-                if walk.meets(interval, bounds) {
-                    entries[n] = (interval.0, interval.1, k as i32, 0);
-                    n += 1;
-                }
-            }
-            sort_entries(&mut entries[..n], false);
-            for &(t_in, _, k, _) in &entries[..n] {
-                if t_in > t_best {
-                    break;
-                }
-                let k = k as usize;
-                let (x, y) = (2 * node.x + (k & 1) as i32, 2 * node.y + (k >> 1) as i32);
+        match node.level {
+            0 => {
+                // A root texel (a triangle within two texels per axis).
                 stats.texel_tests += 1;
-                if let Some(hit) = walk.texel(x, y, corners(k), t_best) {
+                let corners = field.texel_corners(i64::from(node.x), i64::from(node.y));
+                if let Some(hit) = walk.texel(node.x, node.y, corners, t_best) {
                     t_best = hit.hit.t;
                     best = Some(hit);
                 }
             }
-            continue;
-        }
-        let level = node.level - 1;
-        for (k, &interval) in intervals.iter().enumerate() {
-            let (x, y) = (2 * node.x + (k & 1) as i32, 2 * node.y + (k >> 1) as i32);
-            let bounds = field.texel_bounds(level, i64::from(x), i64::from(y));
-            if walk.meets(interval, bounds) {
-                entries[n] = (interval.0, interval.1, x, y);
-                n += 1;
+            1 => {
+                let block = field.samples_block::<3>(2 * i64::from(node.x), 2 * i64::from(node.y));
+                let interval = (node.t_in, node.t_out);
+                if let Some(hit) =
+                    walk.level_one(&block, [0, 0], node.x, node.y, interval, t_best, stats)
+                {
+                    t_best = hit.hit.t;
+                    best = Some(hit);
+                }
             }
-        }
-        // Farthest first onto the stack: the nearest child is popped next.
-        sort_entries(&mut entries[..n], true);
-        for &(t_in, t_out, x, y) in &entries[..n] {
-            stack[top] = Node {
-                level,
-                x,
-                y,
-                t_in,
-                t_out,
-            };
-            top += 1;
+            2 => {
+                // The node's 4 x 4 texels from its 5 x 5 samples, read once: its four children
+                // nearest first, each one's texels nearest first.
+                let block = field.samples_block::<5>(4 * i64::from(node.x), 4 * i64::from(node.y));
+                let intervals =
+                    walk.children(2, node.x, node.y, node.t_in, lesser(node.t_out, t_best));
+                stats.box_tests += 4;
+                let mut n = 0;
+                for (k, &interval) in intervals.iter().enumerate() {
+                    let (i, j) = (2 * (k & 1), 2 * (k >> 1));
+                    let mut b = [u16::MAX, 0];
+                    for row in &block[j..j + 3] {
+                        for &s in &row[i..i + 3] {
+                            b = [b[0].min(s), b[1].max(s)];
+                        }
+                    }
+                    if walk.meets(interval, b) {
+                        entries[n] = (interval.0, interval.1, k as i32, 0);
+                        n += 1;
+                    }
+                }
+                sort_entries(&mut entries[..n], false);
+                for &(t_in, t_out, k, _) in &entries[..n] {
+                    if t_in > t_best {
+                        break;
+                    }
+                    let k = k as usize;
+                    let (i, j) = (k & 1, k >> 1);
+                    let (x, y) = (2 * node.x + i as i32, 2 * node.y + j as i32);
+                    if let Some(hit) = walk.level_one(
+                        &block,
+                        [2 * i, 2 * j],
+                        x,
+                        y,
+                        (t_in, lesser(t_out, t_best)),
+                        t_best,
+                        stats,
+                    ) {
+                        t_best = hit.hit.t;
+                        best = Some(hit);
+                    }
+                }
+            }
+            level => {
+                let intervals =
+                    walk.children(level, node.x, node.y, node.t_in, lesser(node.t_out, t_best));
+                stats.box_tests += 4;
+                let mut n = 0;
+                let four =
+                    field.four_bounds(level - 1, 2 * i64::from(node.x), 2 * i64::from(node.y));
+                for (k, &interval) in intervals.iter().enumerate() {
+                    let (x, y) = (2 * node.x + (k & 1) as i32, 2 * node.y + (k >> 1) as i32);
+                    if walk.meets(interval, four[k]) {
+                        entries[n] = (interval.0, interval.1, x, y);
+                        n += 1;
+                    }
+                }
+                // Farthest first onto the stack: the nearest child is popped next.
+                sort_entries(&mut entries[..n], true);
+                for &(t_in, t_out, x, y) in &entries[..n] {
+                    stack[top] = Node {
+                        level: level - 1,
+                        x,
+                        y,
+                        t_in,
+                        t_out,
+                    };
+                    top += 1;
+                }
+            }
         }
     }
     best.map(|mut b| {

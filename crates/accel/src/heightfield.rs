@@ -223,16 +223,38 @@ impl HeightField {
         (height, lower.max(upper))
     }
 
-    /// The 3 x 3 samples at corners `(i0 + i, j0 + j)`, by rows `j` (a node of level 1 at
-    /// `(i0 / 2, j0 / 2)`: its four texels' corners), each row and column wrapped once.
+    /// The `N x N` samples at corners `(i0 + i, j0 + j)`, by rows `j` (`N = 3`: a node of
+    /// level 1 at `(i0 / 2, j0 / 2)`, its four texels' corners; `N = 5`: a node of level 2),
+    /// each row and column wrapped once.
     #[must_use]
     #[inline]
-    pub(crate) fn samples_3x3(&self, i0: i64, j0: i64) -> [[u16; 3]; 3] {
-        let columns = [i0, i0 + 1, i0 + 2].map(|i| self.wrap_index(i));
+    pub(crate) fn samples_block<const N: usize>(&self, i0: i64, j0: i64) -> [[u16; N]; N] {
+        let columns: [usize; N] = core::array::from_fn(|i| self.wrap_index(i0 + i as i64));
         core::array::from_fn(|j| {
             let row = &self.samples[self.wrap_index(j0 + j as i64) * self.side..][..self.side];
             columns.map(|i| row[i])
         })
+    }
+
+    /// [`HeightField::texel_bounds`] of the four nodes `(x + (k & 1), y + (k >> 1))` of
+    /// `level`, `k` in `0..4` (a node's children, `x` and `y` even), with the stored levels of
+    /// a repeated map read inline (the walks' inner loop).
+    #[must_use]
+    #[inline(always)]
+    pub(crate) fn four_bounds(&self, level: u32, x: i64, y: i64) -> [[u16; 2]; 4] {
+        if level >= 2 && level <= self.log2_side && self.wrap == Wrap::Repeat {
+            let n = (self.side >> level) as i64;
+            let row = &self.pyramid[level as usize - 2];
+            let (x0, x1) = (x & (n - 1), (x + 1) & (n - 1));
+            let (y0, y1) = ((y & (n - 1)) * n, ((y + 1) & (n - 1)) * n);
+            return [
+                row[(y0 + x0) as usize],
+                row[(y0 + x1) as usize],
+                row[(y1 + x0) as usize],
+                row[(y1 + x1) as usize],
+            ];
+        }
+        core::array::from_fn(|k| self.texel_bounds(level, x + (k & 1) as i64, y + (k >> 1) as i64))
     }
 
     /// `(min, max)` sample over the node `(x, y)` of `level` (any integers: the grid is
@@ -251,7 +273,7 @@ impl HeightField {
             }
             1 => {
                 let mut b = [u16::MAX, 0];
-                for row in self.samples_3x3(2 * x, 2 * y) {
+                for row in self.samples_block::<3>(2 * x, 2 * y) {
                     for s in row {
                         b = [b[0].min(s), b[1].max(s)];
                     }
