@@ -265,6 +265,9 @@ impl<T: Real> TexelTriangle<T> {
 pub(crate) struct AffinePatches<T> {
     patch_of: Vec<u32>,
     frames: Vec<TexelFrame>,
+    /// Per patch, its texel-space box `[x0, y0, x1, y1]` (heights `[0, 1]`): where each ray's
+    /// line is rebased, the same point for every triangle of the patch.
+    boxes: Vec<[f64; 4]>,
     triangles: Vec<Option<TexelTriangle<T>>>,
 }
 
@@ -403,6 +406,7 @@ impl<T: Real> AffinePatches<T> {
         let mut patch_frames = Vec::new();
         let mut patch_of = vec![CURVED; count];
         let mut triangles = vec![None; count];
+        let mut boxes = Vec::new();
         let side_t = T::from_f64(side_f);
         for i in 0..count {
             let r = roots[i] as usize;
@@ -413,13 +417,25 @@ impl<T: Real> AffinePatches<T> {
                 patch_index[r] = patch_frames.len() as u32;
                 // Usable: the patch's frame exists.
                 patch_frames.extend(fitted[r]);
+                boxes.push([
+                    f64::INFINITY,
+                    f64::INFINITY,
+                    f64::NEG_INFINITY,
+                    f64::NEG_INFINITY,
+                ]);
             }
             patch_of[i] = patch_index[r];
+            let b = &mut boxes[patch_index[r] as usize];
+            for k in 0..3 {
+                let [x, y] = texel(i, k);
+                *b = [b[0].min(x), b[1].min(y), b[2].max(x), b[3].max(y)];
+            }
             triangles[i] = Some(TexelTriangle::new(&prisms[i], side_t));
         }
         Self {
             patch_of,
             frames: patch_frames,
+            boxes,
             triangles,
         }
     }
@@ -432,51 +448,80 @@ impl<T: Real> AffinePatches<T> {
     /// Bytes held.
     pub(crate) fn memory_bytes(&self) -> usize {
         self.patch_of.len() * 4
-            + self.frames.len() * core::mem::size_of::<TexelFrame>()
+            + self.frames.len() * (core::mem::size_of::<TexelFrame>() + 32)
             + self.triangles.len() * core::mem::size_of::<Option<TexelTriangle<T>>>()
     }
 
-    /// The straight line of `ray` in triangle `tri`'s patch, or `None` for a curved triangle.
+    /// The straight line of `ray` in triangle `tri`'s patch from `t_min` on, with the
+    /// triangle; `None` for a curved triangle (`Some((None, _))` where the line misses the
+    /// patch's box).
     #[inline]
     pub(crate) fn line(
         &self,
         tri: usize,
         ray: &Ray<T>,
-    ) -> Option<(StraightLine<T>, &TexelTriangle<T>)> {
+        t_min: T,
+    ) -> Option<(Option<StraightLine<T>>, &TexelTriangle<T>)> {
         let patch = self.patch_of[tri];
         if patch == CURVED {
             return None;
         }
-        let frame = &self.frames[patch as usize];
+        let patch = patch as usize;
         let triangle = self.triangles[tri].as_ref()?;
-        Some((StraightLine::new(frame, ray), triangle))
+        let line = StraightLine::new(&self.frames[patch], &self.boxes[patch], ray, t_min);
+        Some((line, triangle))
     }
 }
 
-/// A ray in a patch's texel space, `q(t) = origin + t dir` with the world ray's `t`, rounded
-/// to `T` from its `f64` image, with the bounds that pad the walk's boxes.
+/// A ray in a patch's texel space, `q(t0 + tau) = origin + tau dir`, rebased to where it
+/// enters the patch's box (padded) or to `t_min` beyond that, so that a far origin (a camera
+/// hundreds of thousands of sample units above a terrain) costs no precision; computed in
+/// `f64` and rounded to `T`. The rebase point depends on the ray and the patch alone: every
+/// triangle of the patch sees the same line.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct StraightLine<T> {
     origin: [T; 3],
     dir: [T; 3],
     inv: [T; 3],
+    /// The world ray's `t` at the origin, in `f64` and in `T`.
+    t0: (f64, T),
     /// The line in `f64` (before rounding), for the clip.
     wide: ([f64; 3], [f64; 3]),
 }
 
 impl<T: Real> StraightLine<T> {
-    fn new(frame: &TexelFrame, ray: &Ray<T>) -> Self {
+    fn new(frame: &TexelFrame, bx: &[f64; 4], ray: &Ray<T>, t_min: T) -> Option<Self> {
         let o = sub3(to_array::<T>(ray.origin), frame.origin);
         let d = to_array::<T>(ray.dir);
-        let origin64 = frame.to_texel.map(|r| dot3(r, o));
-        let dir64 = frame.to_texel.map(|r| dot3(r, d));
-        let dir = dir64.map(T::from_f64);
-        Self {
+        let o64 = frame.to_texel.map(|r| dot3(r, o));
+        let d64 = frame.to_texel.map(|r| dot3(r, d));
+        // The box padded by a texel and 1/64 in height, as the per-triangle clip is.
+        let lo = [bx[0] - 1.0, bx[1] - 1.0, -1.0 / 64.0];
+        let hi = [bx[2] + 1.0, bx[3] + 1.0, 1.0 + 1.0 / 64.0];
+        let (mut t_in, mut t_out) = (t_min.to_f64(), f64::INFINITY);
+        for a in 0..3 {
+            if d64[a] == 0.0 {
+                if !(o64[a] >= lo[a] && o64[a] <= hi[a]) {
+                    return None;
+                }
+                continue;
+            }
+            let (p, q) = ((lo[a] - o64[a]) / d64[a], (hi[a] - o64[a]) / d64[a]);
+            t_in = t_in.max(p.min(q));
+            t_out = t_out.min(p.max(q));
+        }
+        if !(t_in <= t_out) {
+            return None;
+        }
+        let origin64: [f64; 3] = core::array::from_fn(|a| d64[a].mul_add(t_in, o64[a]));
+        let dir = d64.map(T::from_f64);
+        Some(Self {
             origin: origin64.map(T::from_f64),
             dir,
             inv: dir.map(|v| T::ONE / v),
-            wide: (origin64, dir64),
-        }
+            t0: (t_in, T::from_f64(t_in)),
+            wide: (origin64, d64),
+        })
     }
 }
 
@@ -499,6 +544,8 @@ struct Node<T> {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct StraightHit<T: Real> {
     pub(crate) hit: Hit<T>,
+    /// The line parameter of the hit.
+    tau: T,
     pub(crate) texel: [i32; 2],
     /// 0 lower, 1 upper, 2 flat.
     pub(crate) part: u8,
@@ -518,6 +565,8 @@ struct Walk<'a, T: Real> {
     sample_dir: T,
     /// The padding of the line's heights, in sample units.
     pad_samples: T,
+    /// The world ray's `t` at the line's origin, and the smallest `t` accepted.
+    t0: T,
     t_min: T,
 }
 
@@ -591,8 +640,9 @@ fn watertight<T: Real>(a: [T; 3], b: [T; 3], c: [T; 3]) -> Option<(T, [T; 3])> {
 }
 
 impl<T: Real> Walk<'_, T> {
-    /// Tests texel `(x, y)`: the nearer of its two microtriangles' hits in `[t_min, t_max]`
-    /// whose point the triangle owns.
+    /// Tests texel `(x, y)`: the nearer of its two microtriangles' hits at line parameters
+    /// up to `t_max` (and world distances from `t_min` on) whose point the triangle owns;
+    /// the hit's `t` is the world ray's.
     fn texel(&self, x: i32, y: i32, corners: [u16; 4], t_max: T) -> Option<StraightHit<T>> {
         let h = corners.map(height::<T>);
         let (fx, fy) = (T::from_i32(x), T::from_i32(y));
@@ -611,7 +661,7 @@ impl<T: Real> Walk<'_, T> {
             let Some((t, bary)) = watertight(s[i], s[j], s[k]) else {
                 continue;
             };
-            if !(t >= self.t_min && t <= t_max) {
+            if !(t <= t_max && self.t0 + t >= self.t_min) {
                 continue;
             }
             let point =
@@ -623,8 +673,9 @@ impl<T: Real> Walk<'_, T> {
             let (alpha, beta) = self.triangle.canonical(q);
             t_max = t;
             best = Some(StraightHit {
+                tau: t,
                 hit: Hit {
-                    t,
+                    t: self.t0 + t,
                     alpha,
                     beta,
                     h: point(2).max(T::ZERO).min(T::ONE),
@@ -688,7 +739,7 @@ impl<T: Real> Walk<'_, T> {
             let (tx, ty) = (2 * x + (k & 1) as i32, 2 * y + (k >> 1) as i32);
             stats.texel_tests += 1;
             if let Some(hit) = self.texel(tx, ty, corners(k), t_max) {
-                t_max = hit.hit.t;
+                t_max = hit.tau;
                 best = Some(hit);
             }
         }
@@ -803,7 +854,9 @@ pub(crate) fn walk_straight<T: Real>(
     t_max: T,
     stats: &mut TraversalStats,
 ) -> Option<StraightHit<T>> {
-    let (t_lo, t_hi) = clip(&line, triangle, t_min, t_max)?;
+    // In line parameters (`tau = t - t0`).
+    let (t0, _) = line.t0;
+    let (t_lo, t_hi) = clip(&line, triangle, t_min.to_f64() - t0, t_max.to_f64() - t0)?;
     let kz = {
         let d = line.dir.map(|v| v.abs());
         if d[0] >= d[1] && d[0] >= d[2] {
@@ -846,6 +899,7 @@ pub(crate) fn walk_straight<T: Real>(
         sample_origin: line.origin[2] * samples,
         sample_dir: line.dir[2] * samples,
         pad_samples,
+        t0: line.t0.1,
         t_min,
     };
     let mut best: Option<StraightHit<T>> = None;
@@ -889,7 +943,7 @@ pub(crate) fn walk_straight<T: Real>(
                 stats.texel_tests += 1;
                 let corners = field.texel_corners(i64::from(node.x), i64::from(node.y));
                 if let Some(hit) = walk.texel(node.x, node.y, corners, t_best) {
-                    t_best = hit.hit.t;
+                    t_best = hit.tau;
                     best = Some(hit);
                 }
             }
@@ -899,7 +953,7 @@ pub(crate) fn walk_straight<T: Real>(
                 if let Some(hit) =
                     walk.level_one(&block, [0, 0], node.x, node.y, interval, t_best, stats)
                 {
-                    t_best = hit.hit.t;
+                    t_best = hit.tau;
                     best = Some(hit);
                 }
             }
@@ -941,7 +995,7 @@ pub(crate) fn walk_straight<T: Real>(
                         t_best,
                         stats,
                     ) {
-                        t_best = hit.hit.t;
+                        t_best = hit.tau;
                         best = Some(hit);
                     }
                 }
@@ -975,6 +1029,9 @@ pub(crate) fn walk_straight<T: Real>(
             }
         }
     }
+    // The clip's upper end is `t_max - t0` rounded: the nearest hit may lie a rounding
+    // beyond `t_max`.
+    let best = best.filter(|b| b.hit.t <= t_max);
     best.map(|mut b| {
         let uv = prism.texture_uv(b.hit.alpha, b.hit.beta);
         b.hit.u = uv.x();
@@ -986,16 +1043,17 @@ pub(crate) fn walk_straight<T: Real>(
 /// The line's `t` interval inside the triangle's texel-space prism, padded by one texel
 /// across each base edge and by `1/64` in height (far beyond the rounding of the `T` line
 /// against the `f64` one it is computed from: half an ulp of coordinates below `2^22`, at
-/// most a quarter texel in `f32`), within `[t_min, t_max]`; `None` when empty. Computed in
+/// most a quarter texel in `f32`), within `[tau_min, tau_max]` (line parameters); `None` when
+/// empty. Computed in
 /// `f64` on the unrounded line: it only bounds the walk, the test decides the hits.
 fn clip<T: Real>(
     line: &StraightLine<T>,
     triangle: &TexelTriangle<T>,
-    t_min: T,
-    t_max: T,
+    tau_min: f64,
+    tau_max: f64,
 ) -> Option<(T, T)> {
     let (o, d) = line.wide;
-    let (mut lo, mut hi) = (t_min.to_f64(), t_max.to_f64());
+    let (mut lo, mut hi) = (tau_min, tau_max);
     let mut bound = |value: f64, rate: f64| {
         // value + t rate >= 0
         if rate == 0.0 {
@@ -1023,7 +1081,7 @@ fn clip<T: Real>(
         let rate = sign * (e[0] * d[1] - e[1] * d[0]);
         bound(value, rate);
     }
-    (lo <= hi).then(|| (T::from_f64(lo).max(t_min), T::from_f64(hi).min(t_max)))
+    (lo <= hi).then(|| (T::from_f64(lo), T::from_f64(hi)))
 }
 
 #[cfg(test)]

@@ -910,14 +910,14 @@ impl<T: Real> DisplacedSurface<T> {
             .traverse(ray, t_min, t_max, |tri, prism, t_max| {
                 stats.prism_tests += 1;
                 if self.straight_walk
-                    && let Some((line, triangle)) = self.straight.line(tri, ray)
+                    && let Some((line, triangle)) = self.straight.line(tri, ray, t_min)
                 {
                     // An affine patch has no seam edge (a seam's two sides differ in uv): no wall.
                     let roots = self.prisms.roots(tri);
                     let found = walk_straight(
                         &self.field,
                         roots,
-                        line,
+                        line?,
                         triangle,
                         prism,
                         t_min,

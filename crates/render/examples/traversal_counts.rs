@@ -86,6 +86,11 @@ fn compare<T: Real>(scene: &Scene, w: usize, h: usize) {
         unreachable!("both built from one displacement scene");
     };
     s.set_straight_walk(true);
+    let wide = Nonlinear::<f64>::new(scene);
+    let Nonlinear::Displaced(w64) = &wide else {
+        unreachable!("a displacement scene");
+    };
+    let (mut against_f64, mut curved_against_f64) = (0, 0);
     let v = |a: nlrt_poly::glam::DVec3| {
         T::Vec3::new(T::from_f64(a.x), T::from_f64(a.y), T::from_f64(a.z))
     };
@@ -103,6 +108,15 @@ fn compare<T: Real>(scene: &Scene, w: usize, h: usize) {
             let mut st = TraversalStats::default();
             let a = s.intersect(&ray, T::ZERO, T::INFINITY, &mut st);
             let b = c.intersect(&ray, T::ZERO, T::INFINITY, &mut st);
+            let wide_ray = Ray::new(ray.origin.to_dvec3(), ray.dir.to_dvec3());
+            let truth = wide_ray.and_then(|r| w64.intersect(&r, 0.0, f64::INFINITY, &mut st));
+            if a.is_some() != truth.is_some() {
+                against_f64 += 1;
+                if std::env::var_os("NLRT_SHOW").is_some() {
+                    println!("{ray:?}: straight {a:?}, f64 {truth:?}");
+                }
+            }
+            curved_against_f64 += usize::from(b.is_some() != truth.is_some());
             match (a, b) {
                 (Some(a), Some(b)) => {
                     both += 1;
@@ -116,7 +130,7 @@ fn compare<T: Real>(scene: &Scene, w: usize, h: usize) {
         }
     }
     println!(
-        "{} straight vs curved: {disagree} hit/miss disagreements of {} rays, both hit {both} (same microtriangle {same_texel}), largest relative difference in t {worst:.3e}",
+        "{} straight vs curved: {disagree} hit/miss disagreements of {} rays, both hit {both} (same microtriangle {same_texel}), largest relative difference in t {worst:.3e}; hit/miss against f64 (the same ray widened): straight {against_f64}, curved {curved_against_f64}",
         T::NAME,
         w * h
     );
