@@ -1014,9 +1014,11 @@ pub(crate) fn walk_straight<T: Real>(
                         n += 1;
                     }
                 }
-                // Farthest first onto the stack: the nearest child is popped next.
+                // Farthest first onto the stack: the nearest child is popped next; the
+                // others' memory is fetched while it is walked.
                 sort_entries(&mut entries[..n], true);
                 for &(t_in, t_out, x, y) in &entries[..n] {
+                    field.prefetch_node(level - 1, i64::from(x), i64::from(y));
                     stack[top] = Node {
                         level: level - 1,
                         x,
