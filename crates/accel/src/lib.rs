@@ -8,7 +8,10 @@
 //! - [`HeightField`]: 16-bit heights with an implicit min-max pyramid (levels 0 and 1 read
 //!   from the samples, the rest stored), partial updates after edits.
 //! - [`DisplacedSurface`]: TLAS + the pyramid traversed by nonlinear rays (root selection,
-//!   texel discard, nearest-first order, range reduction, flat-texel shortcut).
+//!   texel discard, nearest-first order, range reduction, flat-texel shortcut); where a
+//!   patch of base triangles has equal displacement directions (a terrain), the ray is a
+//!   straight line in texel space and the pyramid is walked along it, texels by a watertight
+//!   ray-triangle test ([`DisplacedSurface::set_straight_walk`]).
 //! - [`ShellSurface`]: an object in texture space ([`ShellObject`], with its own BVH)
 //!   tiled over the base mesh: TLAS + implicit quadtree over tiles + the object's BVH.
 //! - Crack-free uv and normal seams: [`Seams`] finds them, [`SeamRule::Closed`] (the
