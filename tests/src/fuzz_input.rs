@@ -352,7 +352,8 @@ pub fn displacement_parts<T: Real>(
 /// The displacement traversal target: a small height map (side 2 to 16, any samples, either
 /// wrap mode, tiling 1 to 4), one base triangle and a ray, all from raw bytes. No panic; a hit
 /// is finite, in `[0, inf)`, with `h` in `[0, 1]` and `(alpha, beta)` in the base triangle,
-/// from the straight walk (a base triangle with three equal directions) and the curved one;
+/// from the straight walk (the triangle as given where its three directions are equal, and
+/// again with its first direction at every corner) and the curved one;
 /// and the curved walk's hit is never nearer than the brute-force one (the traversal tests a
 /// subset of the same texels with the same arithmetic), checked when the texel range is small.
 pub fn fuzz_displacement<T: Real>(data: &[u8]) {
@@ -367,6 +368,21 @@ pub fn fuzz_displacement<T: Real>(data: &[u8]) {
         if let Some(hit) = straight {
             check_traversal_hit(&hit.hit, &hit);
         }
+    }
+    // The same triangle with its first direction at all three corners: an affine prism,
+    // walked along the straight line (where its frame is well-conditioned).
+    if let Ok((mesh, field, tiling, _)) = displacement_parts::<T>(data)
+        && let Ok(flat) = nlrt_accel::BaseMesh::new(
+            mesh.positions().to_vec(),
+            vec![mesh.normals()[0]; 3],
+            mesh.uvs().to_vec(),
+            vec![[0, 1, 2]],
+        )
+        && let Ok(affine) = nlrt_accel::DisplacedSurface::new(flat, field, T::ONE, tiling)
+        && let Some(hit) =
+            affine.intersect(&ray, T::ZERO, T::INFINITY, &mut TraversalStats::default())
+    {
+        check_traversal_hit(&hit.hit, &hit);
     }
     surface.set_straight_walk(false);
     let fast = surface.intersect(&ray, T::ZERO, T::INFINITY, &mut TraversalStats::default());

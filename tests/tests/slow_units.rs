@@ -171,3 +171,51 @@ fn a_pole_inside_the_shell_is_walked_in_f64() {
 fn shell_slow_units_walk_a_bounded_number_of_nodes() {
     walk_is_bounded("shell_f32", &["tile-walk"], shell_walk::<f32>);
 }
+
+/// The straight walk on every displacement unit made affine (its triangle's first direction
+/// at all three corners, as the fuzz targets also trace it): each node is expanded at most
+/// once (the walk is nearest first along a line, each node pushed by its parent alone), and an
+/// expansion tests its 4 children, so the child tests stay within 4 per node of the texel
+/// range plus the roots. Units refused at set-up are skipped (the same refusals as above).
+#[test]
+fn straight_walks_of_the_slow_units_are_bounded() {
+    fn straight<T: nlrt_poly::Real>(dir: &str) -> usize {
+        let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+            .join("../fuzz/slow")
+            .join(dir);
+        let mut walked = 0;
+        for entry in std::fs::read_dir(&dir).expect("the slow units are committed") {
+            let path = entry.expect("readable directory").path();
+            let data = std::fs::read(&path).expect("readable unit");
+            let Ok((mesh, field, tiling, ray)) = displacement_parts::<T>(&data) else {
+                continue;
+            };
+            let Ok(flat) = nlrt_accel::BaseMesh::new(
+                mesh.positions().to_vec(),
+                vec![mesh.normals()[0]; 3],
+                mesh.uvs().to_vec(),
+                vec![[0, 1, 2]],
+            ) else {
+                continue;
+            };
+            let Ok(surface) = nlrt_accel::DisplacedSurface::new(flat, field, T::ONE, tiling) else {
+                continue;
+            };
+            if surface.straight_triangles() == 0 {
+                continue;
+            }
+            let mut stats = TraversalStats::default();
+            let _ = surface.intersect(&ray, T::ZERO, T::INFINITY, &mut stats);
+            let bound = 4 * nodes_in_range(surface.roots(0)) + 4;
+            assert!(
+                u64::from(stats.box_tests) <= bound,
+                "{}: {stats:?}, bound {bound}",
+                path.display()
+            );
+            walked += 1;
+        }
+        walked
+    }
+    let walked = straight::<f32>("displacement_f32") + straight::<f64>("displacement_f64");
+    assert!(walked > 0, "no unit made an affine prism");
+}
