@@ -896,7 +896,10 @@ impl<T: Real> DisplacedSurface<T> {
 
     /// The nearest hit of `ray` with `t` in `[t_min, t_max]`: TLAS traversal (conservative
     /// slab tests, nearest first), then the BLAS from the heights at which the ray is inside
-    /// each prism.
+    /// each prism: along the ray's straight line in texel space on the triangles of affine
+    /// patches ([`DisplacedSurface::straight_triangles`], unless
+    /// [`DisplacedSurface::set_straight_walk`] turned it off), along its curve elsewhere
+    /// ([`DisplacedSurface::intersect_blas`]).
     pub fn intersect(
         &self,
         ray: &Ray<T>,
