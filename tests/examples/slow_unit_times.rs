@@ -11,7 +11,7 @@
 use nlrt_accel::TraversalStats;
 use nlrt_baselines::{AffineTracing, MarchOptions, Marching};
 use nlrt_poly::Real;
-use nlrt_tests::fuzz_input::{displacement_case, shell_case};
+use nlrt_tests::fuzz_input::{displacement_case, displacement_parts, shell_case};
 use std::time::Instant;
 
 /// The unit's case, or `None` after saying why it does not set up.
@@ -37,6 +37,27 @@ fn run<T: Real>(data: &[u8], brute: bool) {
         let hit = surface.intersect(&ray, T::ZERO, T::INFINITY, stats);
         hit.map(|h| h.hit.t.to_f64())
     });
+    // The triangle made affine (its first direction at every corner), as the fuzz target
+    // also traces it: the straight walk where the frame allows.
+    if let Ok((mesh, field, tiling, _)) = displacement_parts::<T>(data)
+        && let Ok(flat) = nlrt_accel::BaseMesh::new(
+            mesh.positions().to_vec(),
+            vec![mesh.normals()[0]; 3],
+            mesh.uvs().to_vec(),
+            vec![[0, 1, 2]],
+        )
+        && let Ok(affine) = nlrt_accel::DisplacedSurface::new(flat, field, T::ONE, tiling)
+    {
+        let label = if affine.straight_triangles() > 0 {
+            "nonlinear, the triangle made affine (straight walk)"
+        } else {
+            "nonlinear, the triangle made affine (curved walk: frame refused)"
+        };
+        timed(label, |stats| {
+            let hit = affine.intersect(&ray, T::ZERO, T::INFINITY, stats);
+            hit.map(|h| h.hit.t.to_f64())
+        });
+    }
     timed("tessellation-free (affine)", |stats| {
         let hit = surface.intersect_affine(&ray, T::ZERO, T::INFINITY, stats);
         hit.map(|h| h.t.to_f64())

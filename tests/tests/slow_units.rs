@@ -108,6 +108,9 @@ fn shell_walk<T: nlrt_poly::Real>(data: &[u8]) -> Walked {
     )
 }
 
+/// The f64 target's units: `grazing-long-texel-row` and the three `long-row-*` refused for
+/// their texel ranges; `affine-range-walk`, slow for the tessellation-free baseline only (a
+/// 34,312^2 texel range; the nonlinear walk makes 17 node tests).
 #[test]
 fn slow_units_walk_a_bounded_number_of_nodes() {
     walk_is_bounded(
@@ -127,9 +130,10 @@ fn slow_units_walk_a_bounded_number_of_nodes() {
 /// 151,889 texels), `long-column-miss` for a normal beyond `max_world_coordinate`; and
 /// `subnormal-hit-band`, traced: a prism traced in f64 over 9,398 x 2,700 texels whose one
 /// ray (a hit at `t = 2.2e-44`) makes 29.9M node and 3.7M texel tests (4.4 s in release),
-/// within the bound; `affine-range-walk` and `affine-range-walk-2`, slow for the
-/// tessellation-free baseline only (7.7 s and 15.8 s, 28M and 68M texel tests over 9,398^2 and
-/// 12,659 x 12,658 ranges; the nonlinear walk rejects their rays in f64 at once).
+/// within the bound; `affine-range-walk` to `affine-range-walk-4`, slow for the
+/// tessellation-free baseline only (7.7 s, 15.8 s, 55.6 s and 1.0 s; 28M, 68M, 415M and 8.9M
+/// texel tests over ranges of 9,398^2, 12,659 x 12,658, 16,385 x 50,631 and 25,314 x 23,749
+/// texels; the nonlinear walk rejects their rays in f64 at once).
 #[test]
 fn slow_units_walk_a_bounded_number_of_nodes_f32() {
     walk_is_bounded(
