@@ -11,7 +11,7 @@
 use nlrt_accel::TraversalStats;
 use nlrt_baselines::{AffineTracing, MarchOptions, Marching};
 use nlrt_poly::Real;
-use nlrt_tests::fuzz_input::{displacement_case, displacement_parts, shell_case};
+use nlrt_tests::fuzz_input::{affine_displacement_case, displacement_case, shell_case};
 use std::time::Instant;
 
 /// The unit's case, or `None` after saying why it does not set up.
@@ -39,15 +39,7 @@ fn run<T: Real>(data: &[u8], brute: bool) {
     });
     // The triangle made affine (its first direction at every corner), as the fuzz target
     // also traces it: the straight walk where the frame allows.
-    if let Ok((mesh, field, tiling, _)) = displacement_parts::<T>(data)
-        && let Ok(flat) = nlrt_accel::BaseMesh::new(
-            mesh.positions().to_vec(),
-            vec![mesh.normals()[0]; 3],
-            mesh.uvs().to_vec(),
-            vec![[0, 1, 2]],
-        )
-        && let Ok(affine) = nlrt_accel::DisplacedSurface::new(flat, field, T::ONE, tiling)
-    {
+    if let Ok((affine, _)) = affine_displacement_case::<T>(data) {
         let label = if affine.straight_triangles() > 0 {
             "nonlinear, the triangle made affine (straight walk)"
         } else {

@@ -327,6 +327,27 @@ pub fn displacement_case<T: Real>(
     Ok((surface, ray))
 }
 
+/// [`displacement_case`] with the triangle made affine: its first direction at all three
+/// corners, so that the straight walk takes it where its frame is well-conditioned.
+///
+/// # Errors
+/// The bytes hold no valid base triangle and ray, or the affine triangle is refused.
+pub fn affine_displacement_case<T: Real>(
+    data: &[u8],
+) -> Result<(nlrt_accel::DisplacedSurface<T>, nlrt_shellmap::Ray<T>), String> {
+    let (mesh, field, tiling, ray) = displacement_parts::<T>(data)?;
+    let flat = nlrt_accel::BaseMesh::new(
+        mesh.positions().to_vec(),
+        vec![mesh.normals()[0]; 3],
+        mesh.uvs().to_vec(),
+        vec![[0, 1, 2]],
+    )
+    .map_err(|e| e.to_string())?;
+    let surface = nlrt_accel::DisplacedSurface::new(flat, field, T::ONE, tiling)
+        .map_err(|e| e.to_string())?;
+    Ok((surface, ray))
+}
+
 /// What [`displacement_case`] builds its surface from: the base mesh, the height map, the
 /// tiling and the ray (a test may build the surface otherwise, with another tiling).
 ///
@@ -371,14 +392,7 @@ pub fn fuzz_displacement<T: Real>(data: &[u8]) {
     }
     // The same triangle with its first direction at all three corners: an affine prism,
     // walked along the straight line (where its frame is well-conditioned).
-    if let Ok((mesh, field, tiling, _)) = displacement_parts::<T>(data)
-        && let Ok(flat) = nlrt_accel::BaseMesh::new(
-            mesh.positions().to_vec(),
-            vec![mesh.normals()[0]; 3],
-            mesh.uvs().to_vec(),
-            vec![[0, 1, 2]],
-        )
-        && let Ok(affine) = nlrt_accel::DisplacedSurface::new(flat, field, T::ONE, tiling)
+    if let Ok((affine, _)) = affine_displacement_case::<T>(data)
         && let Some(hit) =
             affine.intersect(&ray, T::ZERO, T::INFINITY, &mut TraversalStats::default())
     {

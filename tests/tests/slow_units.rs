@@ -5,7 +5,9 @@
 //! most 4, `BaseEdges::stretches`), and each visit tests at most its 4 children.
 
 use nlrt_accel::TraversalStats;
-use nlrt_tests::fuzz_input::{displacement_case, displacement_parts, shell_case};
+use nlrt_tests::fuzz_input::{
+    affine_displacement_case, displacement_case, displacement_parts, shell_case,
+};
 use std::path::PathBuf;
 
 /// Nodes of the quadtree over a texel range `[x0, y0, x1, y1]` (inclusive), from the texels
@@ -191,18 +193,7 @@ fn straight_walks_of_the_slow_units_are_bounded() {
         for entry in std::fs::read_dir(&dir).expect("the slow units are committed") {
             let path = entry.expect("readable directory").path();
             let data = std::fs::read(&path).expect("readable unit");
-            let Ok((mesh, field, tiling, ray)) = displacement_parts::<T>(&data) else {
-                continue;
-            };
-            let Ok(flat) = nlrt_accel::BaseMesh::new(
-                mesh.positions().to_vec(),
-                vec![mesh.normals()[0]; 3],
-                mesh.uvs().to_vec(),
-                vec![[0, 1, 2]],
-            ) else {
-                continue;
-            };
-            let Ok(surface) = nlrt_accel::DisplacedSurface::new(flat, field, T::ONE, tiling) else {
+            let Ok((surface, ray)) = affine_displacement_case::<T>(&data) else {
                 continue;
             };
             if surface.straight_triangles() == 0 {

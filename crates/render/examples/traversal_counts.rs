@@ -21,6 +21,19 @@ mod common;
 /// The name in error messages.
 const PROGRAM: &str = "traversal_counts";
 
+/// The camera ray through the centre of pixel `(x, y)` of `w x h`, in `T`.
+fn camera_ray<T: Real>(scene: &Scene, x: usize, y: usize, w: usize, h: usize) -> Option<Ray<T>> {
+    let v = |a: nlrt_poly::glam::DVec3| {
+        T::Vec3::new(T::from_f64(a.x), T::from_f64(a.y), T::from_f64(a.z))
+    };
+    let d = scene.camera.direction(
+        (x as f64 + 0.5) / w as f64,
+        (y as f64 + 0.5) / h as f64,
+        w as f64 / h as f64,
+    );
+    Ray::new(v(scene.camera.eye), v(d))
+}
+
 /// Hits, counters and the hits' checksum of `w x h` pixel-centre camera rays.
 #[inline(never)]
 fn trace_all<T: Real>(
@@ -31,17 +44,9 @@ fn trace_all<T: Real>(
 ) -> (u32, TraversalStats, u64) {
     let mut st = TraversalStats::default();
     let (mut hits, mut checksum) = (0, 0u64);
-    let v = |a: nlrt_poly::glam::DVec3| {
-        T::Vec3::new(T::from_f64(a.x), T::from_f64(a.y), T::from_f64(a.z))
-    };
     for y in 0..h {
         for x in 0..w {
-            let d = scene.camera.direction(
-                (x as f64 + 0.5) / w as f64,
-                (y as f64 + 0.5) / h as f64,
-                w as f64 / h as f64,
-            );
-            let Some(ray) = Ray::new(v(scene.camera.eye), v(d)) else {
+            let Some(ray) = camera_ray::<T>(scene, x, y, w, h) else {
                 continue;
             };
             let hit = match nl {
@@ -91,18 +96,10 @@ fn compare<T: Real>(scene: &Scene, w: usize, h: usize) {
         unreachable!("a displacement scene");
     };
     let (mut against_f64, mut curved_against_f64) = (0, 0);
-    let v = |a: nlrt_poly::glam::DVec3| {
-        T::Vec3::new(T::from_f64(a.x), T::from_f64(a.y), T::from_f64(a.z))
-    };
     let (mut disagree, mut both, mut worst, mut same_texel) = (0, 0, 0.0f64, 0);
     for y in 0..h {
         for x in 0..w {
-            let d = scene.camera.direction(
-                (x as f64 + 0.5) / w as f64,
-                (y as f64 + 0.5) / h as f64,
-                w as f64 / h as f64,
-            );
-            let Some(ray) = Ray::new(v(scene.camera.eye), v(d)) else {
+            let Some(ray) = camera_ray::<T>(scene, x, y, w, h) else {
                 continue;
             };
             let mut st = TraversalStats::default();
