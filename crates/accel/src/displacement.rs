@@ -917,18 +917,13 @@ impl<T: Real> DisplacedSurface<T> {
                 {
                     // An affine patch has no seam edge (a seam's two sides differ in uv): no wall.
                     let roots = self.prisms.roots(tri);
-                    let found = walk_straight(
-                        &self.field,
-                        roots,
-                        line?,
-                        triangle,
-                        prism,
-                        t_min,
-                        t_max,
-                        stats,
-                    )?;
+                    let found =
+                        walk_straight(&self.field, roots, line?, triangle, t_min, t_max, stats)?;
+                    let mut hit = found.hit;
+                    let uv = prism.texture_uv(hit.alpha, hit.beta);
+                    (hit.u, hit.v) = (uv.x(), uv.y());
                     let hit = SurfaceHit {
-                        hit: found.hit,
+                        hit,
                         triangle: tri as u32,
                         texel: found.texel,
                         part: match found.part {

@@ -1,0 +1,561 @@
+//! The straight walk: the min-max pyramid walked along a ray's line in a patch's texel space,
+//! texels decided by the watertight ray-triangle test (see the parent module).
+
+use nlrt_poly::Real;
+use nlrt_shellmap::Hit;
+
+use super::patches::{StraightLine, TexelTriangle};
+use crate::heightfield::{HEIGHT_ONE, HeightField};
+use crate::stats::TraversalStats;
+use crate::tlas::RootNodes;
+
+/// Entries of the walk's stack: up to 4 roots, then each popped node pushes at most 4
+/// children (3 more than it took), once per level on the way down, 23 levels at most (cell
+/// coordinates are below `2^22`).
+const STACK: usize = 4 + 3 * 23;
+
+#[derive(Clone, Copy, Default)]
+struct Node<T> {
+    level: u32,
+    x: i32,
+    y: i32,
+    t_in: T,
+    t_out: T,
+}
+
+/// A hit of the straight walk: distance, canonical coordinates, height, texel, whether the
+/// upper microtriangle (or a flat texel) was hit.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct StraightHit<T: Real> {
+    pub(crate) hit: Hit<T>,
+    /// The line parameter of the hit.
+    tau: T,
+    pub(crate) texel: [i32; 2],
+    /// 0 lower, 1 upper, 2 flat.
+    pub(crate) part: u8,
+}
+
+/// The walk's per-prism state: the line, its clip to the triangle, the paddings.
+struct Walk<'a, T: Real> {
+    line: StraightLine<T>,
+    triangle: &'a TexelTriangle<T>,
+    /// Woop's frame: the dominant axis of the direction last, shears of the other two.
+    axes: [usize; 3],
+    shear: [T; 3],
+    pad_xy: T,
+    /// The line's height at `t` in sample units (`65535` per unit height): `origin + t dir`,
+    /// so that node bounds are compared as stored, without a division.
+    sample_origin: T,
+    sample_dir: T,
+    /// The padding of the line's heights, in sample units.
+    pad_samples: T,
+    /// The world ray's `t` at the line's origin, and the smallest `t` accepted.
+    t0: T,
+    t_min: T,
+}
+
+/// A sample as a height in `[0, 1]`, as the curved path converts it.
+#[inline]
+fn height<T: Real>(s: u16) -> T {
+    T::from_i32(i32::from(s)) / T::from_i32(i32::from(HEIGHT_ONE))
+}
+
+/// The `t` interval in which `o + t d` lies in `[lo, hi]` (`inv = 1 / d`).
+#[inline]
+fn slab<T: Real>(lo: T, hi: T, o: T, d: T, inv: T) -> (T, T) {
+    if d == T::ZERO {
+        return if o >= lo && o <= hi {
+            (-T::INFINITY, T::INFINITY)
+        } else {
+            (T::INFINITY, -T::INFINITY)
+        };
+    }
+    let (a, b) = ((lo - o) * inv, (hi - o) * inv);
+    (a.min(b), a.max(b))
+}
+
+/// A texel corner in Woop's sheared frame: `(X, Y, Z)` relative to the line's origin. A
+/// function of the corner alone, so that shared corners transform to the same numbers.
+#[inline]
+fn sheared<T: Real>(walk: &Walk<'_, T>, p: [T; 3]) -> [T; 3] {
+    let [kx, ky, kz] = walk.axes;
+    let rel = [
+        p[0] - walk.line.origin[0],
+        p[1] - walk.line.origin[1],
+        p[2] - walk.line.origin[2],
+    ];
+    [
+        (-walk.shear[0]).mul_add(rel[kz], rel[kx]),
+        (-walk.shear[1]).mul_add(rel[kz], rel[ky]),
+        walk.shear[2] * rel[kz],
+    ]
+}
+
+/// The watertight test (Woop et al. 2013, two-sided) of the triangle `a, b, c` (sheared
+/// corners): `(t, barycentrics)` or `None`. Edge functions are differences of plain products
+/// of the corners' numbers: the triangle across an edge computes the same value negated.
+#[inline]
+fn watertight<T: Real>(a: [T; 3], b: [T; 3], c: [T; 3]) -> Option<(T, [T; 3])> {
+    let edge = |p: [T; 3], q: [T; 3]| {
+        let e = p[0] * q[1] - p[1] * q[0];
+        if e == T::ZERO && T::MANTISSA_DIGITS < 53 {
+            // Exact products of 24-bit significands, one rounding of their difference in
+            // f64: the sign is exact.
+            let w = |v: T| v.to_f64();
+            T::from_f64(w(p[0]) * w(q[1]) - w(p[1]) * w(q[0]))
+        } else {
+            e
+        }
+    };
+    let u = edge(c, b);
+    let v = edge(a, c);
+    let w = edge(b, a);
+    let negative = u < T::ZERO || v < T::ZERO || w < T::ZERO;
+    let positive = u > T::ZERO || v > T::ZERO || w > T::ZERO;
+    if negative && positive {
+        return None;
+    }
+    let det = u + v + w;
+    if det == T::ZERO {
+        return None;
+    }
+    let t = u.mul_add(a[2], v.mul_add(b[2], w * c[2])) / det;
+    Some((t, [u / det, v / det, w / det]))
+}
+
+impl<T: Real> Walk<'_, T> {
+    /// Tests texel `(x, y)`: the nearer of its two microtriangles' hits at line parameters
+    /// up to `t_max` (and world distances from `t_min` on) whose point the triangle owns;
+    /// the hit's `t` is the world ray's.
+    fn texel(&self, x: i32, y: i32, corners: [u16; 4], t_max: T) -> Option<StraightHit<T>> {
+        let h = corners.map(height::<T>);
+        let (fx, fy) = (T::from_i32(x), T::from_i32(y));
+        let (gx, gy) = (fx + T::ONE, fy + T::ONE);
+        let p = [
+            [fx, fy, h[0]],
+            [gx, fy, h[1]],
+            [fx, gy, h[2]],
+            [gx, gy, h[3]],
+        ];
+        let s = p.map(|q| sheared(self, q));
+        let flat = h[0] == h[1] && h[0] == h[2] && h[0] == h[3];
+        let mut best: Option<StraightHit<T>> = None;
+        let mut t_max = t_max;
+        for (part, [i, j, k]) in [(0u8, [0, 1, 3]), (1u8, [0, 3, 2])] {
+            let Some((t, bary)) = watertight(s[i], s[j], s[k]) else {
+                continue;
+            };
+            if !(t <= t_max && self.t0 + t >= self.t_min) {
+                continue;
+            }
+            let point =
+                |a: usize| bary[0].mul_add(p[i][a], bary[1].mul_add(p[j][a], bary[2] * p[k][a]));
+            let q = [point(0), point(1)];
+            if !self.triangle.owns(q) {
+                continue;
+            }
+            let (alpha, beta) = self.triangle.canonical(q);
+            t_max = t;
+            best = Some(StraightHit {
+                tau: t,
+                hit: Hit {
+                    t: self.t0 + t,
+                    alpha,
+                    beta,
+                    h: point(2).max(T::ZERO).min(T::ONE),
+                    u: T::ZERO,
+                    v: T::ZERO,
+                },
+                texel: [x, y],
+                part: if flat { 2 } else { part },
+            });
+        }
+        best
+    }
+
+    /// The nearest owned hit in the four texels of node `[x, y]` of level 1, whose line
+    /// interval is `interval`: their corners are `block[at[1] + j][at[0] + i]`, `i, j` in
+    /// `0..3`; texels nearest first, until one lies beyond `t_max`.
+    #[inline(always)]
+    fn level_one<const N: usize>(
+        &self,
+        block: &[[u16; N]; N],
+        at: [usize; 2],
+        [x, y]: [i32; 2],
+        interval: (T, T),
+        t_max: T,
+        stats: &mut TraversalStats,
+    ) -> Option<StraightHit<T>> {
+        let intervals = self.children(1, x, y, interval.0, lesser(interval.1, t_max));
+        stats.box_tests += 4;
+        let corners = |k: usize| {
+            let (i, j) = (at[0] + (k & 1), at[1] + (k >> 1));
+            [
+                block[j][i],
+                block[j][i + 1],
+                block[j + 1][i],
+                block[j + 1][i + 1],
+            ]
+        };
+        let mut entries = [(T::ZERO, T::ZERO, 0i32, 0i32); 4];
+        let mut n = 0;
+        for (k, &interval) in intervals.iter().enumerate() {
+            let c = corners(k);
+            let bounds = [
+                c[0].min(c[1]).min(c[2]).min(c[3]),
+                c[0].max(c[1]).max(c[2]).max(c[3]),
+            ];
+            if self.meets(interval, bounds) {
+                entries[n] = (interval.0, interval.1, k as i32, 0);
+                n += 1;
+            }
+        }
+        sort_entries(&mut entries[..n], false);
+        let mut best = None;
+        let mut t_max = t_max;
+        for &(t_in, _, k, _) in &entries[..n] {
+            if t_in > t_max {
+                break;
+            }
+            let k = k as usize;
+            let (tx, ty) = (2 * x + (k & 1) as i32, 2 * y + (k >> 1) as i32);
+            stats.texel_tests += 1;
+            if let Some(hit) = self.texel(tx, ty, corners(k), t_max) {
+                t_max = hit.tau;
+                best = Some(hit);
+            }
+        }
+        best
+    }
+
+    /// The `t` intervals of the line in the four children of node `(x, y)` of `level >= 1`
+    /// (in the order `(0, 0), (1, 0), (0, 1), (1, 1)`), each padded, within `[lo, hi]`: the
+    /// two split lines' crossings computed once for all four.
+    #[inline]
+    fn children(&self, level: u32, x: i32, y: i32, lo: T, hi: T) -> [(T, T); 4] {
+        let size = T::pow2(level as i32 - 1);
+        let l = &self.line;
+        let p = self.pad_xy;
+        let axis = |a: usize, c: i32| -> [(T, T); 2] {
+            let c0 = T::from_i32(c) * (size + size);
+            let (cm, c1) = (c0 + size, c0 + size + size);
+            if l.dir[a] == T::ZERO {
+                let o = l.origin[a];
+                let inside = |lo: T, hi: T| {
+                    if o >= lo && o <= hi {
+                        (-T::INFINITY, T::INFINITY)
+                    } else {
+                        (T::INFINITY, -T::INFINITY)
+                    }
+                };
+                return [inside(c0 - p, cm + p), inside(cm - p, c1 + p)];
+            }
+            let t = |v: T| (v - l.origin[a]) * l.inv[a];
+            let (a0, a1, b0, b1) = (t(c0 - p), t(cm + p), t(cm - p), t(c1 + p));
+            [
+                (lesser(a0, a1), greater(a0, a1)),
+                (lesser(b0, b1), greater(b0, b1)),
+            ]
+        };
+        let (sx, sy) = (axis(0, x), axis(1, y));
+        core::array::from_fn(|k| {
+            let (i, j) = (k & 1, k >> 1);
+            (
+                greater(greater(sx[i].0, sy[j].0), lo),
+                lesser(lesser(sx[i].1, sy[j].1), hi),
+            )
+        })
+    }
+
+    /// The `t` interval of the line in node `(x, y)` of `level` (padded), within `[lo, hi]`.
+    fn node(&self, level: u32, x: i32, y: i32, lo: T, hi: T) -> (T, T) {
+        let size = T::pow2(level as i32);
+        let l = &self.line;
+        let p = self.pad_xy;
+        let (x0, y0) = (T::from_i32(x) * size, T::from_i32(y) * size);
+        let (ax, bx) = slab(x0 - p, x0 + size + p, l.origin[0], l.dir[0], l.inv[0]);
+        let (ay, by) = slab(y0 - p, y0 + size + p, l.origin[1], l.dir[1], l.inv[1]);
+        (ax.max(ay).max(lo), bx.min(by).min(hi))
+    }
+
+    /// Whether the line's heights over the nonempty interval `(t_in, t_out)` (padded) may
+    /// meet a node's `bounds`.
+    #[inline(always)]
+    fn meets(&self, (t_in, t_out): (T, T), bounds: [u16; 2]) -> bool {
+        if !(t_in <= t_out) {
+            return false;
+        }
+        let ha = t_in.mul_add(self.sample_dir, self.sample_origin);
+        let hb = t_out.mul_add(self.sample_dir, self.sample_origin);
+        let (line_lo, line_hi) = (
+            lesser(ha, hb) - self.pad_samples,
+            greater(ha, hb) + self.pad_samples,
+        );
+        line_lo <= T::from_i32(i32::from(bounds[1])) && line_hi >= T::from_i32(i32::from(bounds[0]))
+    }
+}
+
+/// The smaller of two numbers that are not NaN (one comparison: the walk's `t` and heights
+/// never are NaN, so `Real::min`'s NaN handling is not paid for).
+#[inline(always)]
+fn lesser<T: Real>(a: T, b: T) -> T {
+    if a < b { a } else { b }
+}
+
+/// The larger of two numbers that are not NaN (see [`lesser`]).
+#[inline(always)]
+fn greater<T: Real>(a: T, b: T) -> T {
+    if a > b { a } else { b }
+}
+
+/// Up to four `(t_in, t_out, x, y)` sorted by `t_in`, farthest first (`descending`) or
+/// nearest first.
+#[inline]
+fn sort_entries<T: Real>(entries: &mut [(T, T, i32, i32)], descending: bool) {
+    // An insertion sort: at most four entries.
+    for i in 1..entries.len() {
+        let mut j = i;
+        while j > 0 && ((entries[j].0 > entries[j - 1].0) == descending) {
+            entries.swap(j, j - 1);
+            j -= 1;
+        }
+    }
+}
+
+/// The nearest hit of the straight `line` on the displaced surface over `triangle` (its root
+/// nodes `roots`) with `t` in `[t_min, t_max]`: the min-max pyramid walked nearest first
+/// along the line, texels tested by the watertight test. The hit's texture coordinates are
+/// left at 0 (the caller has the prism).
+pub(crate) fn walk_straight<T: Real>(
+    field: &HeightField,
+    roots: RootNodes,
+    line: StraightLine<T>,
+    triangle: &TexelTriangle<T>,
+    t_min: T,
+    t_max: T,
+    stats: &mut TraversalStats,
+) -> Option<StraightHit<T>> {
+    // In line parameters (`tau = t - t0`).
+    let (t0, _) = line.t0;
+    let (t_lo, t_hi) = clip(&line, triangle, t_min.to_f64() - t0, t_max.to_f64() - t0)?;
+    let kz = {
+        let d = line.dir.map(|v| v.abs());
+        if d[0] >= d[1] && d[0] >= d[2] {
+            0
+        } else if d[1] >= d[2] {
+            1
+        } else {
+            2
+        }
+    };
+    let (kx, ky) = ((kz + 1) % 3, (kz + 2) % 3);
+    let shear = [
+        line.dir[kx] / line.dir[kz],
+        line.dir[ky] / line.dir[kz],
+        T::ONE / line.dir[kz],
+    ];
+    // The test's rounding: four roundings in the shear of a corner, on magnitudes up to twice
+    // its distance from the origin (the shears are at most 1), and the same for the line's
+    // point at the walk's far end; in texel units, and in heights.
+    let far = t_hi.abs().max(t_lo.abs());
+    let eps = T::EPSILON;
+    let corner = triangle
+        .corners
+        .iter()
+        .fold(T::ONE, |m, c| m.max(c[0].abs()).max(c[1].abs()));
+    let reach = |a: usize| line.origin[a].abs() + far * line.dir[a].abs();
+    let eight = T::from_i32(8);
+    let pad_xy = eight * eps * (reach(0).max(reach(1)) + corner + T::ONE);
+    let pad_h = eight * eps * (reach(2) + T::ONE);
+    // Heights in sample units: the scaling rounds the origin and direction once more each
+    // (two roundings on magnitudes up to the reach).
+    let samples = T::from_i32(i32::from(HEIGHT_ONE));
+    let pad_samples = samples * (pad_h + T::TWO * eps * (reach(2) + T::ONE));
+    let walk = Walk {
+        line,
+        triangle,
+        axes: [kx, ky, kz],
+        shear,
+        pad_xy,
+        sample_origin: line.origin[2] * samples,
+        sample_dir: line.dir[2] * samples,
+        pad_samples,
+        t0: line.t0.1,
+        t_min,
+    };
+    let mut best: Option<StraightHit<T>> = None;
+    let mut t_best = t_hi;
+    let mut stack = [Node::<T>::default(); STACK];
+    let mut top = 0;
+    let mut entries = [(T::ZERO, T::ZERO, 0i32, 0i32); 4];
+    let mut n = 0;
+    for j in 0..i32::from(roots.ny) {
+        for i in 0..i32::from(roots.nx) {
+            let (x, y) = (roots.x + i, roots.y + j);
+            stats.box_tests += 1;
+            let bounds = field.texel_bounds(roots.level, i64::from(x), i64::from(y));
+            let interval = walk.node(roots.level, x, y, t_lo, t_hi);
+            if walk.meets(interval, bounds) {
+                entries[n] = (interval.0, interval.1, x, y);
+                n += 1;
+            }
+        }
+    }
+    sort_entries(&mut entries[..n], true);
+    for &(t_in, t_out, x, y) in &entries[..n] {
+        stack[top] = Node {
+            level: roots.level,
+            x,
+            y,
+            t_in,
+            t_out,
+        };
+        top += 1;
+    }
+    while top > 0 {
+        top -= 1;
+        let node = stack[top];
+        if node.t_in > t_best {
+            continue;
+        }
+        match node.level {
+            0 => {
+                // A root texel (a triangle within two texels per axis).
+                stats.texel_tests += 1;
+                let corners = field.texel_corners(i64::from(node.x), i64::from(node.y));
+                if let Some(hit) = walk.texel(node.x, node.y, corners, t_best) {
+                    t_best = hit.tau;
+                    best = Some(hit);
+                }
+            }
+            1 => {
+                let block = field.samples_block::<3>(2 * i64::from(node.x), 2 * i64::from(node.y));
+                let interval = (node.t_in, node.t_out);
+                if let Some(hit) =
+                    walk.level_one(&block, [0, 0], [node.x, node.y], interval, t_best, stats)
+                {
+                    t_best = hit.tau;
+                    best = Some(hit);
+                }
+            }
+            2 => {
+                // The node's 4 x 4 texels from its 5 x 5 samples, read once: its four children
+                // nearest first, each one's texels nearest first.
+                let block = field.samples_block::<5>(4 * i64::from(node.x), 4 * i64::from(node.y));
+                let intervals =
+                    walk.children(2, node.x, node.y, node.t_in, lesser(node.t_out, t_best));
+                stats.box_tests += 4;
+                let mut n = 0;
+                for (k, &interval) in intervals.iter().enumerate() {
+                    let (i, j) = (2 * (k & 1), 2 * (k >> 1));
+                    let mut b = [u16::MAX, 0];
+                    for row in &block[j..j + 3] {
+                        for &s in &row[i..i + 3] {
+                            b = [b[0].min(s), b[1].max(s)];
+                        }
+                    }
+                    if walk.meets(interval, b) {
+                        entries[n] = (interval.0, interval.1, k as i32, 0);
+                        n += 1;
+                    }
+                }
+                sort_entries(&mut entries[..n], false);
+                for &(t_in, t_out, k, _) in &entries[..n] {
+                    if t_in > t_best {
+                        break;
+                    }
+                    let k = k as usize;
+                    let (i, j) = (k & 1, k >> 1);
+                    let (x, y) = (2 * node.x + i as i32, 2 * node.y + j as i32);
+                    if let Some(hit) = walk.level_one(
+                        &block,
+                        [2 * i, 2 * j],
+                        [x, y],
+                        (t_in, lesser(t_out, t_best)),
+                        t_best,
+                        stats,
+                    ) {
+                        t_best = hit.tau;
+                        best = Some(hit);
+                    }
+                }
+            }
+            level => {
+                let intervals =
+                    walk.children(level, node.x, node.y, node.t_in, lesser(node.t_out, t_best));
+                stats.box_tests += 4;
+                let mut n = 0;
+                let four =
+                    field.four_bounds(level - 1, 2 * i64::from(node.x), 2 * i64::from(node.y));
+                for (k, &interval) in intervals.iter().enumerate() {
+                    let (x, y) = (2 * node.x + (k & 1) as i32, 2 * node.y + (k >> 1) as i32);
+                    if walk.meets(interval, four[k]) {
+                        entries[n] = (interval.0, interval.1, x, y);
+                        n += 1;
+                    }
+                }
+                // Farthest first onto the stack: the nearest child is popped next; the
+                // others' memory is fetched while it is walked.
+                sort_entries(&mut entries[..n], true);
+                for &(t_in, t_out, x, y) in &entries[..n] {
+                    field.prefetch_node(level - 1, i64::from(x), i64::from(y));
+                    stack[top] = Node {
+                        level: level - 1,
+                        x,
+                        y,
+                        t_in,
+                        t_out,
+                    };
+                    top += 1;
+                }
+            }
+        }
+    }
+    // The clip's upper end is `t_max - t0` rounded: the nearest hit may lie a rounding
+    // beyond `t_max`.
+    best.filter(|b| b.hit.t <= t_max)
+}
+
+/// The line's `t` interval inside the triangle's texel-space prism, padded by one texel
+/// across each base edge and by `1/64` in height (far beyond the rounding of the `T` line
+/// against the `f64` one it is computed from: half an ulp of coordinates below `2^22`, at
+/// most a quarter texel in `f32`), within `[tau_min, tau_max]` (line parameters); `None` when
+/// empty. Computed in
+/// `f64` on the unrounded line: it only bounds the walk, the test decides the hits.
+fn clip<T: Real>(
+    line: &StraightLine<T>,
+    triangle: &TexelTriangle<T>,
+    tau_min: f64,
+    tau_max: f64,
+) -> Option<(T, T)> {
+    let (o, d) = line.wide;
+    let (mut lo, mut hi) = (tau_min, tau_max);
+    let mut bound = |value: f64, rate: f64| {
+        // value + t rate >= 0
+        if rate == 0.0 {
+            if value < 0.0 {
+                hi = f64::NEG_INFINITY;
+            }
+        } else if rate > 0.0 {
+            lo = lo.max(-value / rate);
+        } else {
+            hi = hi.min(-value / rate);
+        }
+    };
+    let pad_h = 1.0 / 64.0;
+    bound(o[2] + pad_h, d[2]);
+    bound(1.0 + pad_h - o[2], -d[2]);
+    let c = triangle.corners.map(|c| [c[0].to_f64(), c[1].to_f64()]);
+    let orientation =
+        (c[1][0] - c[0][0]) * (c[2][1] - c[0][1]) - (c[1][1] - c[0][1]) * (c[2][0] - c[0][0]);
+    let sign = if orientation > 0.0 { 1.0 } else { -1.0 };
+    for k in 0..3 {
+        let (a, b) = (c[k], c[(k + 1) % 3]);
+        let e = [b[0] - a[0], b[1] - a[1]];
+        let length = (e[0] * e[0] + e[1] * e[1]).sqrt();
+        let value = sign * (e[0] * (o[1] - a[1]) - e[1] * (o[0] - a[0])) + length;
+        let rate = sign * (e[0] * d[1] - e[1] * d[0]);
+        bound(value, rate);
+    }
+    (lo <= hi).then(|| (T::from_f64(lo), T::from_f64(hi)))
+}
