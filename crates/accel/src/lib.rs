@@ -54,6 +54,7 @@ mod object_edges;
 mod pose;
 mod precision;
 mod seam;
+mod seam_walls;
 mod shell;
 mod stack;
 mod stats;
