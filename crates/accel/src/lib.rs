@@ -60,6 +60,7 @@ mod stack;
 mod stats;
 #[cfg(test)]
 mod test_util;
+mod texel_test;
 mod tlas;
 
 pub use bvh::{ARITY, Aabb, Bvh4, Node4, SlabRay, ray_triangle, sah_lower_bound};
