@@ -4,8 +4,8 @@
 
 use nlrt_poly::{QuadraticBatch, Real, decided_sign, solve_cubic_in, solve_quadratic_in};
 use nlrt_shellmap::{
-    BaseEdges, Hit, NonlinearRay, Prism, TextureCurve, alpha_beta_eq11,
-    root_decidedly_outside_in_f64,
+    BaseEdges, Hit, NonlinearRay, Prism, TextureCurve, alpha_beta_eq11, piece_clear_in_f64,
+    planes_agree_in_f64, root_decidedly_outside_in_f64,
 };
 
 use crate::displacement::{DisplacedSurface, TexelPart, plane_of};
@@ -156,9 +156,9 @@ impl<T: Real> DisplacedSurface<T> {
         };
         let side = |lower: bool| {
             if lower {
-                (&cubic_l, &abh_l, part_l)
+                (&cubic_l, &abh_l, part_l, &plane_l)
             } else {
-                (&cubic_u, &abh_u, part_u)
+                (&cubic_u, &abh_u, part_u, &plane_u)
             }
         };
         // The error window of a base-edge crossing (split tags 6-8).
@@ -249,9 +249,9 @@ impl<T: Real> DisplacedSurface<T> {
             let inside_next_to_split = previous.is_some() || here.is_some();
             let pair = match edge {
                 _ if i == 0 || !inside_next_to_split => None,
-                4 => Some((&cubic_l, &abh_l, part_l, Some(cubic_u))),
+                4 => Some((side(true), Some((plane_u, cubic_u)))),
                 0..=3 if previous.is_none() || here.is_none() => {
-                    let (own_cubic, own_abh, own_part) = side(here.or(previous).unwrap_or(true));
+                    let own = side(here.or(previous).unwrap_or(true));
                     let (nx, ny, part) = match edge {
                         0 => (x - 1, y, TexelPart::Lower),
                         1 => (x + 1, y, TexelPart::Upper),
@@ -260,24 +260,26 @@ impl<T: Real> DisplacedSurface<T> {
                     };
                     let other = self
                         .texel_plane_in::<C>(nx, ny, part)
-                        .map(|p| p.ray_cubic(ray));
-                    Some((own_cubic, own_abh, own_part, other))
+                        .map(|p| (p, p.ray_cubic(ray)));
+                    Some((own, other))
                 }
                 _ => None,
             };
-            if let Some((own_cubic, own_abh, own_part, Some(other))) = pair {
+            if let Some(((own_cubic, own_abh, own_part, own_plane), Some((other, other_cubic)))) =
+                pair
+            {
                 let certain_same = match decided_sign(own_cubic, a) {
-                    Some(own) => decided_sign(&other, a) == Some(own),
+                    Some(own) => decided_sign(&other_cubic, a) == Some(own),
                     None => false,
                 };
-                if !certain_same {
+                // Where `C` cannot decide, `f64` may (`f32` near a pole of the curve).
+                if !certain_same && !planes_agree_in_f64(prism, &ray.ray, [own_plane, &other], a) {
                     consider(a, own_abh, own_part, &mut t_max);
                 }
             }
             if let Some(lower) = here {
                 let (b, edge_b) = splits[i + 1];
-                let (cubic, abh, part) = side(lower);
-                let plane = if lower { &plane_l } else { &plane_u };
+                let (cubic, abh, part, plane) = side(lower);
                 if a == C::ZERO
                     && let Some(hit) = floor_hit(b, t_max)
                 {
@@ -328,6 +330,15 @@ impl<T: Real> DisplacedSurface<T> {
                             [lo, hi],
                         )
                     {
+                        continue;
+                    }
+                    // A root `C` cannot vouch for (its cubic's sign undecided at an end of the
+                    // search, or the same at both) is dropped where `f64` finds the curve
+                    // clear of the plane over the whole search (`f32` near a pole of the
+                    // curve: a root at the split point beside the ghost above).
+                    let (sign_lo, sign_hi) = (decided_sign(cubic, lo), decided_sign(cubic, hi));
+                    let vouched = sign_lo.is_some() && sign_hi.is_some() && sign_lo != sign_hi;
+                    if !vouched && piece_clear_in_f64(prism, &ray.ray, plane, [lo, hi]) {
                         continue;
                     }
                     consider(r.max(a).min(b), abh, part, &mut t_max);

@@ -123,10 +123,18 @@ pub const SEAM_SCENES: [&str; 2] = ["seam-cube", "seam-sphere"];
 /// renders: `mountain-grazing` (the mountain seen at grazing angles), `fur-cones` (the fur's
 /// torus under broad cones, [`fur_cones`]), `fig9-displaced` (Fig.
 /// 9's columns with a height map), the ghost-hit tori ([`ghost_torus`]) and the seam scenes
-/// ([`SEAM_SCENES`]), and `torus-coarse` ([`coarse_torus`]), for `nlrt watertight`, and
+/// ([`SEAM_SCENES`]), and the coarse tori ([`COARSE_TORI`]), for `nlrt watertight`, and
 /// usable everywhere a scene is.
-pub const VARIANT_NAMES: [&str; 9] = [
-    "torus-coarse",
+pub const VARIANT_NAMES: [&str; 17] = [
+    COARSE_TORI[0].0,
+    COARSE_TORI[1].0,
+    COARSE_TORI[2].0,
+    COARSE_TORI[3].0,
+    COARSE_TORI[4].0,
+    COARSE_TORI[5].0,
+    COARSE_TORI[6].0,
+    COARSE_TORI[7].0,
+    COARSE_TORI[8].0,
     "mountain-grazing",
     "fur-cones",
     "fig9-displaced",
@@ -218,7 +226,10 @@ pub fn builtin(name: &str, size: Size) -> Option<Scene> {
         "fig9" => Some(fig9()),
         "fig9-displaced" => Some(fig9_displaced(map(1024, 256))),
         "torus-spikes" | "torus-tilted" | "torus-twisted" => ghost_torus(name, map(256, 64)),
-        "torus-coarse" => Some(coarse_torus(6, 4, 0.6, map(256, 64))),
+        _ if name.starts_with("torus-coarse") => COARSE_TORI
+            .iter()
+            .find(|(n, _)| *n == name)
+            .map(|&(n, shape)| coarse_torus(n, shape, map(256, 64))),
         "cornell" => Some(cornell(size.detail(15, 6))),
         "seam-cube" => Some(seam_cube(map(1024, 256))),
         "seam-sphere" => Some(seam_sphere(map(1024, 256))),
@@ -940,15 +951,60 @@ fn torus_variant(
     scene
 }
 
+/// The shape of a coarse torus ([`coarse_torus`]): the family that `docs/watertightness.md`
+/// ("Coarse prisms and horizontal microtriangles") sweeps.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CoarseTorus {
+    /// Quads around the ring.
+    pub n_ring: usize,
+    /// Quads around the tube.
+    pub n_tube: usize,
+    /// The shell's height scale (the tube's radius is 0.4).
+    pub height_scale: f64,
+    /// Whether the map carries the single-texel spikes beside its half-height step.
+    pub spikes: bool,
+}
+
+/// The coarse tori by name: base meshes from 6 x 4 to 48 x 32 quads, shells from 0.01 to 0.6
+/// high, with and without spikes. The coarsest and thinnest leaked most in f32 before the
+/// horizontal-microtriangle rule (docs/watertightness.md); each is judged at 1M rays there.
+pub const COARSE_TORI: [(&str, CoarseTorus); 9] = {
+    const fn shape(n_ring: usize, n_tube: usize, height_scale: f64, spikes: bool) -> CoarseTorus {
+        CoarseTorus {
+            n_ring,
+            n_tube,
+            height_scale,
+            spikes,
+        }
+    }
+    [
+        ("torus-coarse", shape(6, 4, 0.6, true)),
+        ("torus-coarse-6x4-h0.2", shape(6, 4, 0.2, true)),
+        ("torus-coarse-6x4-h0.2-step", shape(6, 4, 0.2, false)),
+        ("torus-coarse-6x4-h0.05", shape(6, 4, 0.05, true)),
+        ("torus-coarse-6x4-h0.01", shape(6, 4, 0.01, true)),
+        ("torus-coarse-12x8", shape(12, 8, 0.6, true)),
+        ("torus-coarse-12x8-h0.2", shape(12, 8, 0.2, true)),
+        ("torus-coarse-24x16", shape(24, 16, 0.6, true)),
+        ("torus-coarse-48x32", shape(48, 32, 0.6, true)),
+    ]
+};
+
 /// A coarse, strongly bent torus: `n_ring x n_tube` quads (tens of base triangles, where the
 /// built-in tori have thousands), so each prism's three directions differ by 60-90 degrees;
 /// a shell of `height_scale` (above the tube's radius 0.4, the inner ring's prisms overlap);
-/// a map of isolated full-height single-texel spikes (one in 35 texels) beside a half-height
-/// step over half the map. The first of the family that `docs/watertightness.md` ("Coarse
-/// prisms and horizontal microtriangles") sweeps: its plateau texels beside a spike hold a
-/// horizontal microtriangle at the texel's lowest height, which f32 once lost to rounding.
+/// a map of isolated full-height single-texel spikes (one in 35 texels; left out when
+/// `spikes` is false) beside a half-height step over half the map. Its plateau texels beside a
+/// spike hold a horizontal microtriangle at the texel's lowest height, which f32 once lost to
+/// rounding.
 #[must_use]
-pub fn coarse_torus(n_ring: usize, n_tube: usize, height_scale: f64, side: usize) -> Scene {
+pub fn coarse_torus(name: &'static str, shape: CoarseTorus, side: usize) -> Scene {
+    let CoarseTorus {
+        n_ring,
+        n_tube,
+        height_scale,
+        spikes,
+    } = shape;
     let (positions, normals, uvs, triangles) = grid(n_ring, n_tube, |u, v| {
         let (a, b) = (TAU * u, TAU * v);
         let centre = DVec3::new(a.cos(), 0.0, a.sin());
@@ -958,7 +1014,7 @@ pub fn coarse_torus(n_ring: usize, n_tube: usize, height_scale: f64, side: usize
     let heights: Vec<f32> = (0..side * side)
         .map(|k| {
             let (i, j) = (k % side, k / side);
-            if i % 5 == 2 && j % 7 == 3 {
+            if spikes && i % 5 == 2 && j % 7 == 3 {
                 1.0
             } else if i >= side / 2 {
                 0.5
@@ -968,7 +1024,7 @@ pub fn coarse_torus(n_ring: usize, n_tube: usize, height_scale: f64, side: usize
         })
         .collect();
     let mut scene = torus_variant(
-        "torus-coarse",
+        name,
         (positions, normals, uvs, triangles),
         field(side, &heights),
         height_scale,

@@ -46,7 +46,7 @@ pub use prism::{Canonical, Prism, onto_base_triangle};
 pub use prism_hit::{PrismSpan, intersect_prism};
 pub use ray::{
     BaseEdges, NonlinearRay, Ray, WideRay, decidedly_outside_in_f64, in_f64, max_world_coordinate,
-    root_decidedly_outside_in_f64,
+    piece_clear_in_f64, planes_agree_in_f64, root_decidedly_outside_in_f64,
 };
 
 /// The README's examples, run by `cargo test --doc`.

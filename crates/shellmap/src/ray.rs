@@ -93,10 +93,7 @@ pub fn root_decidedly_outside_in_f64<T: Real>(
         return false;
     }
     let (_, curve) = in_f64(prism, ray);
-    let plane = crate::TexturePlane::<f64> {
-        normal: plane.normal.to_dvec3(),
-        k: plane.k.to_f64(),
-    };
+    let plane = plane_in_f64(plane);
     let r = r.to_f64();
     let h = nlrt_poly::solve_cubic_in(plane.ray_cubic(&curve), lo.to_f64(), hi.to_f64())
         .iter()
@@ -104,6 +101,63 @@ pub fn root_decidedly_outside_in_f64<T: Real>(
         .min_by(|a, b| (a - r).abs().total_cmp(&(b - r).abs()))
         .unwrap_or(r);
     BaseEdges::new(&curve).decidedly_outside(k, h)
+}
+
+/// `plane` widened to `f64` exactly (its normal and offset as they are in `T`).
+fn plane_in_f64<T: Real>(plane: &crate::TexturePlane<T>) -> crate::TexturePlane<f64> {
+    crate::TexturePlane::<f64> {
+        normal: plane.normal.to_dvec3(),
+        k: plane.k.to_f64(),
+    }
+}
+
+/// Whether the cubics of two planes along the curve of `ray` in `prism` have the same sign
+/// beyond doubt at height `h`, decided in `f64` on the same inputs (as
+/// [`decidedly_outside_in_f64`]). For `f32` tracing, where the texel test compares the planes
+/// on the two sides of a split point and `f32` cannot tell their signs apart: near a pole of
+/// the curve (`D(h)` about a tenth of its coefficients, a coarse, strongly bent prism) the
+/// cubics' values fall below their rounding bounds while the curve passes the shared edge
+/// several thousandths of a unit of height above it, and reporting the split point gave a
+/// ghost hit there (`docs/watertightness.md`, "Coarse prisms"). Always `false` for `f64`.
+#[must_use]
+pub fn planes_agree_in_f64<T: Real>(
+    prism: &Prism<T>,
+    ray: &Ray<T>,
+    planes: [&crate::TexturePlane<T>; 2],
+    h: T,
+) -> bool {
+    if T::MANTISSA_DIGITS >= f64::MANTISSA_DIGITS {
+        return false;
+    }
+    let (_, curve) = in_f64(prism, ray);
+    let [a, b] =
+        planes.map(|p| nlrt_poly::decided_sign(&plane_in_f64(p).ray_cubic(&curve), h.to_f64()));
+    a.is_some() && a == b
+}
+
+/// Whether `plane`'s cubic along the curve of `ray` in `prism` has, in `f64` on the same
+/// inputs, no root on `[lo, hi]` and the same sign beyond doubt at both ends: the curve does
+/// not cross the plane there, whatever `T`'s rounding found. For `f32` roots the texel test
+/// cannot vouch for (its cubic's sign undecided at an end of the piece, or equal at both): the
+/// ghost of [`planes_agree_in_f64`] was also a root at the split point. Always `false` for
+/// `f64`.
+#[must_use]
+pub fn piece_clear_in_f64<T: Real>(
+    prism: &Prism<T>,
+    ray: &Ray<T>,
+    plane: &crate::TexturePlane<T>,
+    [lo, hi]: [T; 2],
+) -> bool {
+    if T::MANTISSA_DIGITS >= f64::MANTISSA_DIGITS {
+        return false;
+    }
+    let (_, curve) = in_f64(prism, ray);
+    let cubic = plane_in_f64(plane).ray_cubic(&curve);
+    let (lo, hi) = (lo.to_f64(), hi.to_f64());
+    let sign = nlrt_poly::decided_sign(&cubic, lo);
+    sign.is_some()
+        && sign == nlrt_poly::decided_sign(&cubic, hi)
+        && nlrt_poly::solve_cubic_in(cubic, lo, hi).is_empty()
 }
 
 /// `prism` and `ray` in `f64` (each value converted exactly) and the nonlinear ray of the two
