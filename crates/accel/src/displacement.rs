@@ -46,6 +46,8 @@ pub enum DisplacementError {
         /// Its extent in texels along u and v.
         range: [f64; 2],
     },
+    /// The midlevel is not a number in `[0, 1]`.
+    BadMidlevel(f64),
 }
 
 impl fmt::Display for DisplacementError {
@@ -65,6 +67,10 @@ impl fmt::Display for DisplacementError {
                 f,
                 "triangle {triangle} spans {} x {} texels (u x v, after tiling); at most {MAX_TEXEL_RANGE} per axis are traced: subdivide the base mesh",
                 range[0], range[1]
+            ),
+            Self::BadMidlevel(m) => write!(
+                f,
+                "midlevel {m} is not a number in [0, 1] (the height at which the map leaves the base mesh where it is)"
             ),
         }
     }
@@ -120,6 +126,8 @@ pub struct DisplacedSurface<T: Real> {
     straight: AffinePatches<T>,
     /// Whether affine patches are walked straight (else every prism takes the curved path).
     straight_walk: bool,
+    /// The height that stays on the base mesh ([`DisplacedSurface::with_midlevel`]).
+    midlevel: T,
 }
 
 impl<T: Real> DisplacedSurface<T> {
@@ -181,16 +189,75 @@ impl<T: Real> DisplacedSurface<T> {
         tiling: T,
         rule: SeamRule,
     ) -> Result<Self, DisplacementError> {
+        Self::with_midlevel(mesh, field, height_scale, tiling, rule, T::ZERO)
+    }
+
+    /// [`DisplacedSurface::with_seam_rule`] for a map whose height `midlevel` (in `[0, 1]`)
+    /// stays on the base mesh: the surface lies at `(h - midlevel) * height_scale` along the
+    /// directions, so the map pushes both in and out (Blender's and Cycles' midlevel,
+    /// RenderMan's displacement centre; `0` pushes out only, `0.5` centres the shell on the
+    /// mesh). The shell's floor, [`DisplacedSurface::mesh`], is the base mesh moved by
+    /// `-midlevel` times its displacement directions, after the seams' welding, so that the
+    /// two sides of a seam move by the same numbers and stay closed; everything else (prisms,
+    /// TLAS, walks, seam walls) is built on that floor.
+    ///
+    /// ```
+    /// use nlrt_accel::{BaseMesh, DisplacedSurface, HeightField, SeamRule, TraversalStats, Wrap};
+    /// use nlrt_poly::glam::{DVec2, DVec3};
+    /// use nlrt_shellmap::Ray;
+    /// let p = vec![DVec3::ZERO, DVec3::X, DVec3::new(1.0, 1.0, 0.0), DVec3::Y];
+    /// let uv = p.iter().map(|p| DVec2::new(p.x, p.y)).collect();
+    /// let mesh = BaseMesh::new(p, vec![DVec3::Z; 4], uv, vec![[0, 1, 2], [0, 2, 3]]).unwrap();
+    /// // Every sample at height 0.25: with midlevel 0.5 the surface lies a quarter of the
+    /// // height scale (2) below the mesh.
+    /// let field = HeightField::new(4, vec![16384; 16], Wrap::Repeat).unwrap();
+    /// let surface =
+    ///     DisplacedSurface::with_midlevel(mesh, field, 2.0, 1.0, SeamRule::Closed, 0.5).unwrap();
+    /// let ray = Ray::new(DVec3::new(0.3, 0.6, 3.0), -DVec3::Z).unwrap();
+    /// let hit = surface.intersect(&ray, 0.0, f64::INFINITY, &mut TraversalStats::default());
+    /// let depth = 3.0 - (16384.0 / 65535.0 - 0.5) * 2.0;
+    /// assert!((hit.unwrap().hit.t - depth).abs() < 1e-12);
+    /// ```
+    ///
+    /// # Errors
+    /// As [`DisplacedSurface::new`], and a midlevel outside `[0, 1]` or NaN.
+    pub fn with_midlevel(
+        mesh: BaseMesh<T>,
+        field: HeightField,
+        height_scale: T,
+        tiling: T,
+        rule: SeamRule,
+        midlevel: T,
+    ) -> Result<Self, DisplacementError> {
+        if !(midlevel >= T::ZERO && midlevel <= T::ONE) {
+            return Err(DisplacementError::BadMidlevel(midlevel.to_f64()));
+        }
+        if !height_scale.is_finite() {
+            return Err(DisplacementError::BadHeightScale(height_scale.to_f64()));
+        }
         let side = field.side() as f64;
         let repeats = field.wrap() == crate::Wrap::Repeat;
         let seams = Seams::find(&mesh, tiling.to_f64(), repeats);
         let mut mesh = mesh;
-        if rule == SeamRule::Closed && seams.welds_something() {
-            let welded = seams.welded_normals::<T>(mesh.normals());
-            if welded.as_slice() != mesh.normals() {
-                let positions = mesh.positions().to_vec();
-                // Welded normals of finite normals are finite: the pose is accepted.
-                let _ = mesh.set_pose(&positions, &welded);
+        let welded = (rule == SeamRule::Closed && seams.welds_something())
+            .then(|| seams.welded_normals::<T>(mesh.normals()));
+        let normals = welded.as_deref().unwrap_or(mesh.normals());
+        if welded.is_some() || midlevel != T::ZERO {
+            let floor = shell_floor(mesh.positions(), normals, height_scale, midlevel);
+            let normals = normals.to_vec();
+            // Welded normals of finite normals are finite; a floor can overflow (a huge
+            // height scale), which is the world range's error on a triangle using it.
+            if mesh.set_pose(&floor, &normals).is_err() {
+                let finite =
+                    |p: &T::Vec3| p.x().is_finite() && p.y().is_finite() && p.z().is_finite();
+                let triangle = (0..mesh.triangle_count())
+                    .position(|i| {
+                        mesh.triangle(i)
+                            .iter()
+                            .any(|&v| !finite(&floor[v as usize]))
+                    })
+                    .unwrap_or(0);
+                return Err(DisplacementError::WorldOutOfRange { triangle });
             }
         }
         let prisms = PrismTlas::new(mesh, height_scale, tiling, side).map_err(|e| match e {
@@ -208,6 +275,7 @@ impl<T: Real> DisplacedSurface<T> {
         Ok(Self {
             straight,
             straight_walk: true,
+            midlevel,
             prisms,
             field,
             texel_size: T::ONE / T::from_f64(side),
@@ -229,10 +297,17 @@ impl<T: Real> DisplacedSurface<T> {
         self.seam_rule
     }
 
-    /// The base mesh.
+    /// The shell's floor: the base mesh with its welded directions, moved by `-midlevel`
+    /// times them ([`DisplacedSurface::with_midlevel`]; the base mesh itself at midlevel 0).
     #[must_use]
     pub fn mesh(&self) -> &BaseMesh<T> {
         &self.prisms.mesh
+    }
+
+    /// The height that stays on the base mesh ([`DisplacedSurface::with_midlevel`]).
+    #[must_use]
+    pub fn midlevel(&self) -> T {
+        self.midlevel
     }
 
     /// The height field.
@@ -285,13 +360,15 @@ impl<T: Real> DisplacedSurface<T> {
         update: TlasUpdate,
     ) -> Result<PoseUpdate, MeshError> {
         let vertices = self.mesh().positions().len();
-        let update = if self.seam_rule == SeamRule::Closed
-            && self.seams.welds_something()
-            && positions.len() == vertices
-            && normals.len() == vertices
-        {
-            let welded = self.seams.welded_normals::<T>(normals);
-            self.prisms.set_pose(positions, &welded, update)
+        let sizes_match = positions.len() == vertices && normals.len() == vertices;
+        let welded =
+            (self.seam_rule == SeamRule::Closed && self.seams.welds_something() && sizes_match)
+                .then(|| self.seams.welded_normals::<T>(normals));
+        let normals = welded.as_deref().unwrap_or(normals);
+        let update = if self.midlevel != T::ZERO && sizes_match {
+            let scale = self.prisms.height_scale;
+            let floor = shell_floor(positions, normals, scale, self.midlevel);
+            self.prisms.set_pose(&floor, normals, update)
         } else {
             self.prisms.set_pose(positions, normals, update)
         }?;
@@ -753,6 +830,39 @@ pub(crate) fn plane_of<C: Real>(
     }
 }
 
+/// The shell's floor under a base mesh: each position moved by `-midlevel` times its
+/// displacement direction (`normal * height_scale`, the prism's direction as
+/// [`BaseMesh::prism`] computes it), in one rounding per coordinate
+/// ([`DisplacedSurface::with_midlevel`]; the pre-tessellated references build on the same
+/// floor). Vertices equal in position and welded direction (the two sides of a seam) get the
+/// same floor, bit for bit.
+///
+/// ```
+/// use nlrt_poly::glam::DVec3;
+/// let floor = nlrt_accel::shell_floor::<f64>(&[DVec3::ONE], &[DVec3::Z], 2.0, 0.25);
+/// assert_eq!(floor, vec![DVec3::new(1.0, 1.0, 0.5)]);
+/// ```
+#[must_use]
+pub fn shell_floor<T: Real>(
+    positions: &[T::Vec3],
+    normals: &[T::Vec3],
+    height_scale: T,
+    midlevel: T,
+) -> alloc::vec::Vec<T::Vec3> {
+    positions
+        .iter()
+        .zip(normals)
+        .map(|(&p, &n)| {
+            let d = n * height_scale;
+            T::Vec3::new(
+                (-midlevel).mul_add(d.x(), p.x()),
+                (-midlevel).mul_add(d.y(), p.y()),
+                (-midlevel).mul_add(d.z(), p.z()),
+            )
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -921,6 +1031,89 @@ mod tests {
             walls > 100 && closed_cracks > 100 && plain > 500,
             "{walls} {closed_cracks} {plain}"
         );
+    }
+
+    /// Midlevel: the surface is the one built at midlevel 0 on the floor (the welded mesh
+    /// moved by `-midlevel` times its directions), hit for hit and bit for bit; the seam's two
+    /// sides move together (the same floor vertices), the walk equals testing every texel,
+    /// a pose is shifted like the rest pose, and midlevels outside `[0, 1]` are refused.
+    #[test]
+    fn a_midlevel_is_the_surface_on_the_moved_floor() {
+        let (mesh, field) = seamed_and_plain_squares();
+        let (scale, m) = (0.3, 0.5);
+        let shifted = DisplacedSurface::with_midlevel(
+            mesh.clone(),
+            field.clone(),
+            scale,
+            1.0,
+            SeamRule::Closed,
+            m,
+        )
+        .unwrap();
+        assert_eq!(shifted.midlevel(), m);
+        let at_zero = DisplacedSurface::new(mesh.clone(), field.clone(), scale, 1.0).unwrap();
+        let floor = shell_floor::<f64>(
+            at_zero.mesh().positions(),
+            at_zero.mesh().normals(),
+            scale,
+            m,
+        );
+        assert_eq!(shifted.mesh().positions(), floor.as_slice());
+        assert!(
+            floor[0] == floor[3] && floor[2] == floor[4],
+            "the seam's sides move together"
+        );
+        let mut on_floor_mesh = at_zero.mesh().clone();
+        on_floor_mesh
+            .set_pose(&floor, at_zero.mesh().normals())
+            .unwrap();
+        let on_floor = DisplacedSurface::new(on_floor_mesh, field.clone(), scale, 1.0).unwrap();
+        // The same surface after a pose: the rest pose given again.
+        let mut posed = shifted.clone();
+        posed
+            .set_pose(mesh.positions(), mesh.normals(), crate::TlasUpdate::DEFAULT)
+            .unwrap();
+        let (mut hits, mut below_base) = (0, 0);
+        for i in 0..40 {
+            for j in 0..40 {
+                let (a, b) = (f64::from(i) / 39.0, f64::from(j) / 39.0);
+                let Some(ray) = Ray::new(
+                    DVec3::new(-0.2 + 3.4 * a, -0.2 + 1.4 * b, 1.0),
+                    DVec3::new(0.3, 0.2, -1.0),
+                ) else {
+                    continue;
+                };
+                let mut stats = TraversalStats::default();
+                let hit = shifted.intersect(&ray, 0.0, f64::INFINITY, &mut stats);
+                assert_eq!(
+                    hit,
+                    on_floor.intersect(&ray, 0.0, f64::INFINITY, &mut stats)
+                );
+                assert_eq!(hit, posed.intersect(&ray, 0.0, f64::INFINITY, &mut stats));
+                let brute = shifted.intersect_brute_force(&ray, 0.0, f64::INFINITY);
+                assert_eq!(hit.map(|h| h.hit.t), brute.map(|h| h.hit.t));
+                if let Some(h) = hit {
+                    hits += 1;
+                    // Below the base mesh (z = 0 on the plain square, whose normals point up
+                    // within 0.1 rad): the map pushes in under its midlevel.
+                    below_base += usize::from(h.triangle >= 2 && ray.at(h.hit.t).z < -1e-3);
+                }
+            }
+        }
+        assert!(hits > 600 && below_base > 100, "{hits} {below_base}");
+        for bad in [-0.25, 1.5, f64::NAN] {
+            let e = DisplacedSurface::with_midlevel(
+                mesh.clone(),
+                field.clone(),
+                scale,
+                1.0,
+                SeamRule::Closed,
+                bad,
+            )
+            .unwrap_err();
+            assert!(matches!(e, DisplacementError::BadMidlevel(_)), "{e:?}");
+            assert!(alloc::format!("{e}").contains("[0, 1]"));
+        }
     }
 
     /// A walk whose stack is too small for its pieces gives up and finishes the triangle by

@@ -234,9 +234,17 @@ impl Method {
             | Method::DistanceMapF32
             | Method::DistanceMapF64 => None,
             Method::ProjectiveF32 | Method::ProjectiveF64 => {
-                (!matches!(scene.content, Content::Displacement(_))).then_some(
-                    "projective displacement mapping renders height fields, not instanced objects",
-                )
+                if !matches!(scene.content, Content::Displacement(_)) {
+                    Some(
+                        "projective displacement mapping renders height fields, not instanced objects",
+                    )
+                } else if scene.midlevel != 0.0 {
+                    Some(
+                        "projective displacement mapping offsets its own prisms from the base mesh: midlevel 0 only",
+                    )
+                } else {
+                    None
+                }
             }
             Method::TetrahedraF32 | Method::TetrahedraF64 => {
                 (!matches!(scene.content, Content::Displacement(_))).then_some(

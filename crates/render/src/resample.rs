@@ -56,6 +56,13 @@ pub fn geometry_image<T: Real>(scene: &Scene) -> Option<(GeometryImage<T>, Vec<u
     let w = n + 1;
     let mut positions = vec![DVec3::splat(f64::NAN); w * w];
     let mut owner = vec![u32::MAX; w * w];
+    // The shell's floor at the midlevel's depth (one chart: no seams to weld).
+    let floor = nlrt_accel::shell_floor::<f64>(
+        &scene.positions,
+        &scene.normals,
+        scene.height_scale,
+        scene.midlevel,
+    );
     for (k, t) in scene.triangles.iter().enumerate() {
         let uv = t.map(|v| scene.uvs[v as usize] * n as f64);
         let det = (uv[1] - uv[0]).perp_dot(uv[2] - uv[0]);
@@ -63,7 +70,7 @@ pub fn geometry_image<T: Real>(scene: &Scene) -> Option<(GeometryImage<T>, Vec<u
             continue; // no inverse of Eq. 2-3: the chart has no area here
         }
         let (p, nrm) = (
-            t.map(|v| scene.positions[v as usize]),
+            t.map(|v| floor[v as usize]),
             t.map(|v| scene.normals[v as usize] * scene.height_scale),
         );
         let lo = uv[0].min(uv[1]).min(uv[2]).floor().max(DVec2::ZERO);

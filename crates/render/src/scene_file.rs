@@ -13,6 +13,8 @@
 //!                             # power of two
 //! height_scale = 0.1
 //! tiling = 1.0                # optional, default 1
+//! midlevel = 0.0              # optional: the height that stays on the mesh, in [0, 1]
+//!                             # (0: the map pushes out only; 0.5: in and out alike)
 //! [camera]
 //! eye = [0.0, 1.0, 3.0]
 //! target = [0.0, 0.0, 0.0]
@@ -99,6 +101,8 @@ struct DisplacementSection {
     tiling: f64,
     #[serde(default)]
     wrap: WrapName,
+    #[serde(default)]
+    midlevel: f64,
 }
 
 #[derive(Deserialize)]
@@ -186,7 +190,7 @@ pub fn load_from(path: &Path, source: &Source<'_>) -> Result<Scene, String> {
             Err(format!("{}: {what} = {v} is out of range", path.display()))
         }
     };
-    let (content, height_scale, tiling) = match (&file.displacement, &file.shell) {
+    let (content, height_scale, tiling, midlevel) = match (&file.displacement, &file.shell) {
         (Some(d), None) => {
             check(
                 "height_scale",
@@ -198,13 +202,19 @@ pub fn load_from(path: &Path, source: &Source<'_>) -> Result<Scene, String> {
                 d.tiling,
                 d.tiling.is_finite() && d.tiling > 0.0 && d.tiling <= 1e6,
             )?;
+            check("midlevel", d.midlevel, (0.0..=1.0).contains(&d.midlevel))?;
             let mut field = load_height_map(&dir.join(&d.height_map), source)?;
             if let WrapName::Clamp = d.wrap {
                 // The samples were valid under one wrap, so they are under the other.
                 field = HeightField::new(field.side(), field.samples().to_vec(), Wrap::Clamp)
                     .map_err(|e| format!("{}: {e}", path.display()))?;
             }
-            (Content::Displacement(field), d.height_scale, d.tiling)
+            (
+                Content::Displacement(field),
+                d.height_scale,
+                d.tiling,
+                d.midlevel,
+            )
         }
         (None, Some(s)) => {
             check(
@@ -230,7 +240,7 @@ pub fn load_from(path: &Path, source: &Source<'_>) -> Result<Scene, String> {
                     object_path.display()
                 ));
             }
-            (Content::Shell(object), s.height_scale, s.tiling)
+            (Content::Shell(object), s.height_scale, s.tiling, 0.0)
         }
         _ => {
             return Err(format!(
@@ -298,6 +308,7 @@ pub fn load_from(path: &Path, source: &Source<'_>) -> Result<Scene, String> {
         },
         motion,
         seam_rule: nlrt_accel::SeamRule::Closed,
+        midlevel,
     };
     // Mesh values, height scale and tiling as the tracers will see them in f64 (f32 is
     // checked when an f32 method is asked for).
@@ -714,9 +725,10 @@ pub fn export(scene: &Scene, dir: &Path) -> Result<PathBuf, String> {
                 .and_then(|mut w| w.write_image_data(&bytes))
                 .map_err(|e| format!("{}: {e}", path.display()))?;
             format!(
-                "[displacement]\nheight_map = \"{name}-height.png\"\nheight_scale = {}\ntiling = {}\n{}",
+                "[displacement]\nheight_map = \"{name}-height.png\"\nheight_scale = {}\ntiling = {}\nmidlevel = {}\n{}",
                 scene.height_scale,
                 scene.tiling,
+                scene.midlevel,
                 if field.wrap() == Wrap::Clamp {
                     "wrap = \"clamp\"\n"
                 } else {

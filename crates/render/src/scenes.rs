@@ -28,6 +28,9 @@ pub struct Scene {
     pub content: Content,
     /// World height of `h = 1` (the shell's thickness along unit normals).
     pub height_scale: f64,
+    /// The map's height that stays on the base mesh (displacement; `0`: the map pushes out
+    /// only, `0.5`: in and out alike; [`nlrt_accel::DisplacedSurface::with_midlevel`]).
+    pub midlevel: f64,
     /// Repeats of the height map or object per unit of uv.
     pub tiling: f64,
     /// Camera.
@@ -123,9 +126,12 @@ pub const SEAM_SCENES: [&str; 2] = ["seam-cube", "seam-sphere"];
 /// renders: `mountain-grazing` (the mountain seen at grazing angles), `fur-cones` (the fur's
 /// torus under broad cones, [`fur_cones`]), `fig9-displaced` (Fig.
 /// 9's columns with a height map), the ghost-hit tori ([`ghost_torus`]) and the seam scenes
-/// ([`SEAM_SCENES`]), and the coarse tori ([`COARSE_TORI`]), for `nlrt watertight`, and
-/// usable everywhere a scene is.
-pub const VARIANT_NAMES: [&str; 17] = [
+/// ([`SEAM_SCENES`]), the coarse tori ([`COARSE_TORI`]), and `mountain-midlevel` and
+/// `torus-midlevel` (the mountain and the torus with midlevel 0.5: the maps push in and out),
+/// for `nlrt watertight`, and usable everywhere a scene is.
+pub const VARIANT_NAMES: [&str; 19] = [
+    "mountain-midlevel",
+    "torus-midlevel",
     COARSE_TORI[0].0,
     COARSE_TORI[1].0,
     COARSE_TORI[2].0,
@@ -221,6 +227,20 @@ pub fn builtin(name: &str, size: Size) -> Option<Scene> {
             m.camera.eye = DVec3::new(0.0, 0.4, 0.95);
             m.camera.target = DVec3::new(0.0, 0.25, -1.0);
             Some(m)
+        }
+        "mountain-midlevel" | "torus-midlevel" => {
+            let mut scene = if name == "mountain-midlevel" {
+                mountain(map(4096, 1024))
+            } else {
+                torus_scene(map(1024, 256))
+            };
+            scene.name = if name == "mountain-midlevel" {
+                "mountain-midlevel"
+            } else {
+                "torus-midlevel"
+            };
+            scene.midlevel = 0.5;
+            Some(scene)
         }
         "scales" => Some(scales()),
         "fig9" => Some(fig9()),
@@ -360,6 +380,7 @@ pub fn mountain(side: usize) -> Scene {
         material: Material::Diffuse,
         motion: Motion::deform(Deformation::Wave),
         seam_rule: SeamRule::Closed,
+        midlevel: 0.0,
     }
 }
 
@@ -427,6 +448,7 @@ pub fn cylinder(side: usize) -> Scene {
         material: Material::Diffuse,
         motion: Motion::deform(Deformation::Bend),
         seam_rule: SeamRule::Closed,
+        midlevel: 0.0,
     }
 }
 
@@ -472,6 +494,7 @@ pub fn fur_cones(side: usize) -> Scene {
         material: Material::Diffuse,
         motion: Motion::deform(Deformation::Breathe),
         seam_rule: SeamRule::Closed,
+        midlevel: 0.0,
     }
 }
 
@@ -563,19 +586,24 @@ impl Scene {
         let mesh = self
             .try_mesh::<T>()
             .map_err(|e| format!("base mesh in {}: {e}", T::NAME))?;
-        DisplacedSurface::with_seam_rule(mesh, field.clone(), scale, tiling, self.seam_rule)
-            .map_err(|e| {
-                let hint = match e {
-                    nlrt_accel::DisplacementError::UvOutOfRange { .. } => {
-                        " (texture coordinates x tiling x map side must stay within 2^22 texels)"
-                    }
-                    nlrt_accel::DisplacementError::WorldOutOfRange { .. } => {
-                        world_range_hint::<T>()
-                    }
-                    _ => "",
-                };
-                format!("in {}: {e}{hint}", T::NAME)
-            })
+        DisplacedSurface::with_midlevel(
+            mesh,
+            field.clone(),
+            scale,
+            tiling,
+            self.seam_rule,
+            T::from_f64(self.midlevel),
+        )
+        .map_err(|e| {
+            let hint = match e {
+                nlrt_accel::DisplacementError::UvOutOfRange { .. } => {
+                    " (texture coordinates x tiling x map side must stay within 2^22 texels)"
+                }
+                nlrt_accel::DisplacementError::WorldOutOfRange { .. } => world_range_hint::<T>(),
+                _ => "",
+            };
+            format!("in {}: {e}{hint}", T::NAME)
+        })
     }
 
     /// The shell-mapped surface of a shell scene in precision `T`.
@@ -743,6 +771,7 @@ fn shell_torus(
         material,
         motion: Motion::deform(Deformation::Breathe),
         seam_rule: SeamRule::Closed,
+        midlevel: 0.0,
     }
 }
 
@@ -833,6 +862,7 @@ pub fn cornell(n: usize) -> Scene {
         material: Material::Diffuse,
         motion: Motion::deform(Deformation::Squash),
         seam_rule: SeamRule::Closed,
+        midlevel: 0.0,
     }
 }
 
@@ -860,6 +890,7 @@ pub fn torus_scene(side: usize) -> Scene {
         material: Material::Diffuse,
         motion: Motion::deform(Deformation::Breathe),
         seam_rule: SeamRule::Closed,
+        midlevel: 0.0,
     }
 }
 
@@ -1127,6 +1158,7 @@ pub fn fig9() -> Scene {
         material: Material::Diffuse,
         motion: Motion::deform(Deformation::Twist),
         seam_rule: SeamRule::Closed,
+        midlevel: 0.0,
     }
 }
 
@@ -1330,6 +1362,7 @@ pub fn seam_cube(side: usize) -> Scene {
         material: Material::Diffuse,
         motion: Motion::deform(Deformation::Squash),
         seam_rule: SeamRule::Closed,
+        midlevel: 0.0,
     }
 }
 
@@ -1371,6 +1404,7 @@ pub fn seam_sphere(side: usize) -> Scene {
         material: Material::Diffuse,
         motion: Motion::deform(Deformation::Breathe),
         seam_rule: SeamRule::Closed,
+        midlevel: 0.0,
     }
 }
 
@@ -1409,5 +1443,52 @@ mod tests {
                 "{e}"
             );
         }
+    }
+
+    /// Midlevel 0.5: nonlinear tracing and the pre-tessellated reference (built on the same
+    /// floor) hit at the same distances, in both precisions, and the surface is another one
+    /// than at midlevel 0 (the map pushes in where it pushed out). On the mountain, whose
+    /// prisms are affine, the reference's flat microtriangles are the surface itself, so f64
+    /// agrees to its rounding.
+    #[test]
+    fn a_midlevel_moves_the_surface_and_every_method_with_it() {
+        use crate::tessellate::Tessellated;
+        use crate::tracer::Tracer;
+        use crate::tracers::Nonlinear;
+        let scene = builtin("mountain-midlevel", Size::Small).unwrap();
+        let zero = builtin("mountain", Size::Small).unwrap();
+        assert_eq!((scene.midlevel, zero.midlevel), (0.5, 0.0));
+        let reference = Tessellated::new(&scene);
+        let (nonlinear_32, nonlinear_64, at_zero) = (
+            Nonlinear::<f32>::new(&scene),
+            Nonlinear::<f64>::new(&scene),
+            Nonlinear::<f64>::new(&zero),
+        );
+        let n = 48;
+        let (mut hits, mut moved) = (0, 0);
+        for k in 0..n * n {
+            let (x, y) = ((k % n) as f64 + 0.5, (k / n) as f64 + 0.5);
+            let dir = scene.camera.direction(x / n as f64, y / n as f64, 1.0);
+            let eye = scene.camera.eye;
+            let trace = |t: &dyn Tracer| t.intersect(eye, dir, 0.0, f64::INFINITY).map(|h| h.t);
+            let truth = trace(&reference);
+            for (tracer, tolerance) in [(&nonlinear_64 as &dyn Tracer, 1e-9), (&nonlinear_32, 1e-4)]
+            {
+                match (truth, trace(tracer)) {
+                    (Some(a), Some(b)) => {
+                        assert!((a - b).abs() <= tolerance * a, "ray {k}: {a} vs {b}");
+                    }
+                    (a, b) => assert_eq!(a.is_some(), b.is_some(), "ray {k}: {a:?} vs {b:?}"),
+                }
+            }
+            if let Some(t) = truth {
+                hits += 1;
+                if trace(&at_zero).is_none_or(|z| (z - t).abs() > 1e-6 * t) {
+                    moved += 1;
+                }
+            }
+        }
+        assert!(hits > n * n / 4, "{hits}");
+        assert!(moved > hits * 9 / 10, "{moved} of {hits}");
     }
 }

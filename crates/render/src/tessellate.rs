@@ -52,7 +52,7 @@ fn clip(poly: &[Uvh], a: DVec2, n: DVec2) -> Vec<Uvh> {
 fn seam_walls(
     scene: &Scene,
     seams: &Seams,
-    normals: &[DVec3],
+    (floor, normals): (&[DVec3], &[DVec3]),
     field: &HeightField,
 ) -> Vec<([DVec3; 3], u32)> {
     let texels = scene.tiling * field.side() as f64;
@@ -96,7 +96,7 @@ fn seam_walls(
             let at = p + (q - p) * s;
             field.height_at(at.x, at.y).0
         };
-        let (p0, p1) = (scene.positions[i], scene.positions[j]);
+        let (p0, p1) = (floor[i], floor[j]);
         let (n0, n1) = (
             normals[i] * scene.height_scale,
             normals[j] * scene.height_scale,
@@ -172,6 +172,15 @@ impl Tessellated {
             |s| s.welded_normals::<f64>(&scene.normals),
         );
         let normals = &normals;
+        // The shell's floor: the base mesh at the midlevel's depth (as nonlinear tracing
+        // moves it, after the welding).
+        let floor = nlrt_accel::shell_floor::<f64>(
+            &scene.positions,
+            normals,
+            scene.height_scale,
+            scene.midlevel,
+        );
+        let floor = &floor;
         // (base triangle, texel row) jobs.
         let mut jobs = Vec::new();
         let mut skipped = 0;
@@ -201,7 +210,7 @@ impl Tessellated {
                 let (_, t, det) = base_of(b).expect("job of a kept triangle");
                 let tri = scene.triangles[b];
                 let (p, n) = (
-                    tri.map(|v| scene.positions[v as usize]),
+                    tri.map(|v| floor[v as usize]),
                     tri.map(|v| normals[v as usize] * scene.height_scale),
                 );
                 let orient = det.signum();
@@ -262,7 +271,7 @@ impl Tessellated {
             .unzip();
         let (mut triangles, mut base) = (triangles, base);
         if let (Some(seams), Content::Displacement(field)) = (&seams, &scene.content) {
-            for (t, b) in seam_walls(scene, seams, normals, field) {
+            for (t, b) in seam_walls(scene, seams, (floor, normals), field) {
                 triangles.push(t);
                 base.push(b);
             }

@@ -625,3 +625,48 @@ fn watertight_judges_scene_files() {
         assert!(decided > 0 && leaks == 0, "{row}");
     }
 }
+
+/// `midlevel` in `[displacement]`: 0.5 renders and is judged leak-free (the part below the
+/// base included); a midlevel outside `[0, 1]` is one message naming the file and the key;
+/// the projective method, which offsets its own prisms, refuses a midlevel with its reason.
+#[test]
+fn a_midlevel_renders_is_judged_and_is_checked() {
+    let dir = scratch("midlevel");
+    edit(
+        &dir,
+        "bumps.toml",
+        "tiling = 2.0",
+        "tiling = 2.0\nmidlevel = 0.5",
+    );
+    let (code, err) = render_with(&dir, &[]);
+    assert_eq!(code, Some(0), "{err}");
+    let out = nlrt(&[
+        "watertight",
+        dir.join("bumps.toml").to_str().unwrap(),
+        "--rays",
+        "4096",
+        "--method",
+        "nonlinear",
+    ]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    let rows: Vec<&str> = text.lines().filter(|l| l.contains("nonlinear")).collect();
+    assert_eq!(rows.len(), 2, "{text}");
+    for row in rows {
+        let cells: Vec<&str> = row.split('|').map(str::trim).collect();
+        let (decided, leaks): (u64, u64) = (cells[4].parse().unwrap(), cells[5].parse().unwrap());
+        assert!(decided > 0 && leaks == 0, "{row}");
+    }
+    let (code, err) = render_with(&dir, &["--method", "projective"]);
+    assert_eq!(code, Some(2), "{err}");
+    assert!(err.contains("midlevel 0 only"), "{err}");
+    for bad in ["1.5", "-0.1", "nan"] {
+        let dir = scratch(&format!("midlevel-{bad}"));
+        edit(
+            &dir,
+            "bumps.toml",
+            "tiling = 2.0",
+            &format!("tiling = 2.0\nmidlevel = {bad}"),
+        );
+        expect_error(&dir, &["bumps.toml", "midlevel", "out of range"]);
+    }
+}
