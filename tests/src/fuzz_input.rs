@@ -306,7 +306,7 @@ fn map_of<T: Real>(data: &[u8]) -> (nlrt_accel::HeightField, T, &[u8]) {
             b(0) | (b(1) << 8)
         })
         .collect();
-    let field = HeightField::new(side, samples, wrap).expect("valid side");
+    let field = HeightField::new(side, side, samples, wrap).expect("valid side");
     (
         field,
         tiling,

@@ -71,7 +71,7 @@ pub fn height_map(side: usize, kind: MapKind, wrap: Wrap, seed: u64) -> HeightFi
             }
         })
         .collect();
-    HeightField::new(side, samples, wrap).expect("valid side")
+    HeightField::new(side, side, samples, wrap).expect("valid side")
 }
 
 /// An `n x n` grid of quads over `[0, 1]^2`, two triangles each, bent into a bump of height

@@ -88,7 +88,7 @@ mod tests {
     fn random_field(side: usize, seed: u64) -> HeightField {
         let mut r = unit_randoms(seed);
         let samples = (0..side * side).map(|_| (r() * 65535.0) as u16).collect();
-        HeightField::new(side, samples, Wrap::Repeat).expect("a valid map")
+        HeightField::new(side, side, samples, Wrap::Repeat).expect("a valid map")
     }
 
     /// A tilted grid over a random map, displaced along a direction off its normal.

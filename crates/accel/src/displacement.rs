@@ -167,7 +167,7 @@ impl<T: Real> DisplacedSurface<T> {
     ///     DVec2::new(q.x, q.y) * 0.25 + shift
     /// }).collect();
     /// let mesh = BaseMesh::new(positions, vec![DVec3::Z; 6], uvs, vec![[0, 1, 2], [3, 4, 5]]).unwrap();
-    /// let field = HeightField::new(2, vec![0, HEIGHT_ONE, 0, HEIGHT_ONE], Wrap::Clamp).unwrap();
+    /// let field = HeightField::new(2, 2, vec![0, HEIGHT_ONE, 0, HEIGHT_ONE], Wrap::Clamp).unwrap();
     /// // A ray at height 0.25 crossing the diagonal at (0.4, 0.4), from above the low side
     /// // into the high side's shell under its surface: only the seam wall stops it.
     /// let ray = Ray::new(DVec3::new(-1.0, 1.8, 0.25), DVec3::new(1.0, -1.0, 0.0)).unwrap();
@@ -210,7 +210,7 @@ impl<T: Real> DisplacedSurface<T> {
     /// let mesh = BaseMesh::new(p, vec![DVec3::Z; 4], uv, vec![[0, 1, 2], [0, 2, 3]]).unwrap();
     /// // Every sample at height 0.25: with midlevel 0.5 the surface lies a quarter of the
     /// // height scale (2) below the mesh.
-    /// let field = HeightField::new(4, vec![16384; 16], Wrap::Repeat).unwrap();
+    /// let field = HeightField::new(4, 4, vec![16384; 16], Wrap::Repeat).unwrap();
     /// let surface =
     ///     DisplacedSurface::with_midlevel(mesh, field, 2.0, 1.0, SeamRule::Closed, 0.5).unwrap();
     /// let ray = Ray::new(DVec3::new(0.3, 0.6, 3.0), -DVec3::Z).unwrap();
@@ -235,7 +235,21 @@ impl<T: Real> DisplacedSurface<T> {
         if !height_scale.is_finite() {
             return Err(DisplacementError::BadHeightScale(height_scale.to_f64()));
         }
-        let side = field.side() as f64;
+        if !(tiling > T::ZERO && tiling.is_finite()) {
+            return Err(DisplacementError::BadTiling(tiling.to_f64()));
+        }
+        let side = field.grid_side() as f64;
+        // The tracers' square grid of `side` texels per unit: the tiling times the map's
+        // share of it per axis (exactly the tiling on a square power-of-two map).
+        let [scale_u, scale_v] = field.grid_scale();
+        let uv_scale = if scale_u == 1.0 && scale_v == 1.0 {
+            [tiling; 2]
+        } else {
+            [
+                T::from_f64(tiling.to_f64() * scale_u),
+                T::from_f64(tiling.to_f64() * scale_v),
+            ]
+        };
         let repeats = field.wrap() == crate::Wrap::Repeat;
         let seams = Seams::find(&mesh, tiling.to_f64(), repeats);
         let mut mesh = mesh;
@@ -260,7 +274,7 @@ impl<T: Real> DisplacedSurface<T> {
                 return Err(DisplacementError::WorldOutOfRange { triangle });
             }
         }
-        let prisms = PrismTlas::new(mesh, height_scale, tiling, side).map_err(|e| match e {
+        let prisms = PrismTlas::new(mesh, height_scale, uv_scale, side).map_err(|e| match e {
             SetupError::HeightScale(v) => DisplacementError::BadHeightScale(v),
             SetupError::Tiling(v) => DisplacementError::BadTiling(v),
             SetupError::UvOutOfRange(triangle) => DisplacementError::UvOutOfRange { triangle },
@@ -271,7 +285,7 @@ impl<T: Real> DisplacedSurface<T> {
                 DisplacementError::TexelRangeTooLarge { triangle, range }
             }
         })?;
-        let straight = AffinePatches::find(&prisms.mesh, height_scale, tiling, field.side());
+        let straight = AffinePatches::find(&prisms.mesh, height_scale, uv_scale, field.grid_side());
         Ok(Self {
             straight,
             straight_walk: true,
@@ -344,7 +358,7 @@ impl<T: Real> DisplacedSurface<T> {
     /// let p = vec![DVec3::ZERO, DVec3::X, DVec3::new(1.0, 1.0, 0.0), DVec3::Y];
     /// let uv = p.iter().map(|p| DVec2::new(p.x, p.y)).collect();
     /// let mesh = BaseMesh::new(p.clone(), vec![DVec3::Z; 4], uv, vec![[0, 1, 2], [0, 2, 3]]).unwrap();
-    /// let field = HeightField::new(4, vec![u16::MAX; 16], Wrap::Repeat).unwrap();
+    /// let field = HeightField::new(4, 4, vec![u16::MAX; 16], Wrap::Repeat).unwrap();
     /// let mut surface = DisplacedSurface::new(mesh, field, 0.5, 1.0).unwrap();
     /// // The next frame: the square lifted by 1.
     /// let lifted: Vec<DVec3> = p.iter().map(|p| *p + DVec3::Z).collect();
@@ -376,8 +390,8 @@ impl<T: Real> DisplacedSurface<T> {
         self.straight = AffinePatches::find(
             &self.prisms.mesh,
             self.prisms.height_scale,
-            self.prisms.tiling,
-            self.field.side(),
+            self.prisms.uv_scale,
+            self.field.grid_side(),
         );
         Ok(update)
     }
@@ -921,7 +935,7 @@ mod tests {
         let mesh = BaseMesh::new(positions, normals, uvs, triangles).unwrap();
         let side = 16;
         let heights = random_heights(side, 0x2545_f491_4f6c_dd1d_u64);
-        let field = HeightField::from_unit_heights(side, &heights, Wrap::Clamp).unwrap();
+        let field = HeightField::from_unit_heights(side, side, &heights, Wrap::Clamp).unwrap();
         (mesh, field)
     }
 
@@ -953,7 +967,7 @@ mod tests {
                 .collect();
             BaseMesh::new(p, vec![DVec3::Z; 4], uv, vec![[0, 1, 2], [0, 2, 3]]).unwrap()
         };
-        let field = HeightField::new(4, vec![0; 16], Wrap::Repeat).unwrap();
+        let field = HeightField::new(4, 4, vec![0; 16], Wrap::Repeat).unwrap();
         // 4 texels per unit of uv: a uv side of 2^14 spans exactly 2^16 texels along u.
         let limit = MAX_TEXEL_RANGE / 4.0;
         assert!(DisplacedSurface::<f64>::new(square(limit), field.clone(), 0.1, 1.0).is_ok());
@@ -1138,7 +1152,7 @@ mod tests {
         .unwrap();
         let side = 32;
         let heights = random_heights(side, 0x9e37_79b9_7f4a_7c15_u64);
-        let field = HeightField::from_unit_heights(side, &heights, Wrap::Repeat).unwrap();
+        let field = HeightField::from_unit_heights(side, side, &heights, Wrap::Repeat).unwrap();
         let surface = DisplacedSurface::new(mesh, field, 0.2, 1.0).unwrap();
         let (mut fallbacks, mut hits) = (0, 0);
         // Hits on an edge shared by two texels may be found by either, at distances that

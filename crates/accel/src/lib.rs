@@ -28,7 +28,7 @@
 //! let p = vec![DVec3::ZERO, DVec3::X, DVec3::new(1.0, 1.0, 0.0), DVec3::Y];
 //! let uv = p.iter().map(|p| DVec2::new(p.x, p.y)).collect();
 //! let mesh = BaseMesh::new(p, vec![DVec3::Z; 4], uv, vec![[0, 1, 2], [0, 2, 3]]).unwrap();
-//! let field = HeightField::new(4, vec![u16::MAX; 16], Wrap::Repeat).unwrap();
+//! let field = HeightField::new(4, 4, vec![u16::MAX; 16], Wrap::Repeat).unwrap();
 //! let surface = DisplacedSurface::new(mesh, field, 0.5, 1.0).unwrap();
 //! let ray = Ray::new(DVec3::new(0.3, 0.6, 2.0), -DVec3::Z).unwrap();
 //! let hit = surface.intersect(&ray, 0.0, f64::INFINITY, &mut TraversalStats::default()).unwrap();

@@ -202,10 +202,13 @@ impl<T: Real> BaseMesh<T> {
         &self.uvs
     }
 
-    /// The prism of triangle `i` with normals scaled by `height_scale` and uvs by `uv_scale`.
+    /// The prism of triangle `i` with normals scaled by `height_scale` and uvs by `uv_scale`
+    /// (per axis: the tiling, times the map's [`crate::HeightField::grid_scale`] for a map that
+    /// is not square or not a power of two).
     #[must_use]
     #[inline]
-    pub fn prism(&self, i: usize, height_scale: T, uv_scale: T) -> Prism<T> {
+    pub fn prism(&self, i: usize, height_scale: T, uv_scale: [T; 2]) -> Prism<T> {
+        let scaled = |uv: T::Vec2| T::Vec2::new(uv.x() * uv_scale[0], uv.y() * uv_scale[1]);
         let [a, b, c] = self.triangles[i].map(|v| v as usize);
         Prism::new(
             [self.positions[a], self.positions[b], self.positions[c]],
@@ -215,9 +218,9 @@ impl<T: Real> BaseMesh<T> {
                 self.normals[c] * height_scale,
             ],
             [
-                self.uvs[a] * uv_scale,
-                self.uvs[b] * uv_scale,
-                self.uvs[c] * uv_scale,
+                scaled(self.uvs[a]),
+                scaled(self.uvs[b]),
+                scaled(self.uvs[c]),
             ],
         )
     }

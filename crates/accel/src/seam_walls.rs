@@ -207,7 +207,7 @@ impl<T: Real> DisplacedSurface<T> {
             .sides
             .iter()
             .position(|side| side.triangle as usize == tri && usize::from(side.edge) == k)?;
-        let texels = self.field.side() as f64;
+        let texels = self.field.grid_side() as f64;
         let side_height = |index: usize| {
             let side = edge.sides[index];
             let prism = self.prism(side.triangle as usize);

@@ -213,7 +213,7 @@ impl<T: Real> ShellSurface<T> {
         height_scale: T,
         tiling: T,
     ) -> Result<Self, ShellError> {
-        let prisms = PrismTlas::new(mesh, height_scale, tiling, 1.0).map_err(|e| match e {
+        let prisms = PrismTlas::new(mesh, height_scale, [tiling; 2], 1.0).map_err(|e| match e {
             SetupError::HeightScale(v) => ShellError::BadHeightScale(v),
             SetupError::Tiling(v) => ShellError::BadTiling(v),
             SetupError::UvOutOfRange(triangle) => ShellError::UvOutOfRange { triangle },

@@ -107,7 +107,8 @@ pub(crate) fn within_world_range<T: Real>(prism: &Prism<T>) -> bool {
 pub(crate) struct PrismTlas<T: Real> {
     pub(crate) mesh: BaseMesh<T>,
     pub(crate) height_scale: T,
-    pub(crate) tiling: T,
+    /// What the mesh's uvs are multiplied by per axis ([`BaseMesh::prism`]).
+    pub(crate) uv_scale: [T; 2],
     roots: Vec<RootNodes>,
     pub(crate) tlas: Bvh4<T>,
     /// The TLAS's SAH cost right after its last build.
@@ -118,23 +119,25 @@ pub(crate) struct PrismTlas<T: Real> {
 }
 
 impl<T: Real> PrismTlas<T> {
-    /// `cells_per_unit`: cells per unit of tiled uv (a map's side; 1 for object tiles).
+    /// `uv_scale`: what uvs are multiplied by per axis (the tiling, per axis for a map that
+    /// is not square); `cells_per_unit`: cells per unit of scaled uv (a map's
+    /// [`crate::HeightField::grid_side`]; 1 for object tiles).
     pub(crate) fn new(
         mesh: BaseMesh<T>,
         height_scale: T,
-        tiling: T,
+        uv_scale: [T; 2],
         cells_per_unit: f64,
     ) -> Result<Self, SetupError> {
         if !height_scale.is_finite() {
             return Err(SetupError::HeightScale(height_scale.to_f64()));
         }
-        if !(tiling > T::ZERO && tiling.is_finite()) {
-            return Err(SetupError::Tiling(tiling.to_f64()));
+        if let Some(&bad) = uv_scale.iter().find(|s| !(**s > T::ZERO && s.is_finite())) {
+            return Err(SetupError::Tiling(bad.to_f64()));
         }
         let mut roots = Vec::with_capacity(mesh.triangle_count());
         let mut boxes = Vec::with_capacity(mesh.triangle_count());
         for i in 0..mesh.triangle_count() {
-            let prism = mesh.prism(i, height_scale, tiling);
+            let prism = mesh.prism(i, height_scale, uv_scale);
             if !within_world_range(&prism) {
                 return Err(SetupError::WorldOutOfRange(i));
             }
@@ -166,7 +169,7 @@ impl<T: Real> PrismTlas<T> {
         Ok(Self {
             mesh,
             height_scale,
-            tiling,
+            uv_scale,
             roots,
             sah_cost_at_build,
             sah_excess_at_build: sah_excess(sah_cost_at_build, &boxes, &tlas),
@@ -180,7 +183,7 @@ impl<T: Real> PrismTlas<T> {
 
     #[inline]
     pub(crate) fn prism(&self, i: usize) -> Prism<T> {
-        self.mesh.prism(i, self.height_scale, self.tiling)
+        self.mesh.prism(i, self.height_scale, self.uv_scale)
     }
 
     pub(crate) fn memory_bytes(&self) -> usize {
@@ -288,7 +291,7 @@ mod tests {
     }
 
     fn flat_map() -> HeightField {
-        HeightField::from_unit_heights(4, &[0.5; 16], Wrap::Clamp).expect("a valid map")
+        HeightField::from_unit_heights(4, 4, &[0.5; 16], Wrap::Clamp).expect("a valid map")
     }
 
     /// Meshes within `max_world_coordinate` build, beyond it they are refused by name (at

@@ -197,7 +197,7 @@ pub trait AffineTracing<T: Real> {
     ///     vec![DVec2::ZERO, DVec2::X, DVec2::ONE, DVec2::Y],
     ///     vec![[0, 1, 2], [0, 2, 3]],
     /// ).unwrap();
-    /// let field = HeightField::from_unit_heights(8, &[0.5f32; 64], Wrap::Clamp).unwrap();
+    /// let field = HeightField::from_unit_heights(8, 8, &[0.5f32; 64], Wrap::Clamp).unwrap();
     /// let surface = DisplacedSurface::new(mesh, field, 1.0, 1.0).unwrap();
     /// let ray = Ray::new(DVec3::new(0.3, 0.6, 2.0), DVec3::new(0.0, 0.0, -1.0)).unwrap();
     /// let hit = surface.intersect_affine(&ray, 0.0, f64::INFINITY, &mut TraversalStats::default()).unwrap();
@@ -331,7 +331,7 @@ mod tests {
 
     fn plane(heights: &[f32], side: usize) -> DisplacedSurface<f64> {
         let mesh = crate::test_util::unit_square(DVec3::Z, [[0, 1, 2], [0, 2, 3]]);
-        let field = HeightField::from_unit_heights(side, heights, Wrap::Clamp).unwrap();
+        let field = HeightField::from_unit_heights(side, side, heights, Wrap::Clamp).unwrap();
         DisplacedSurface::new(mesh, field, 1.0, 1.0).unwrap()
     }
 
@@ -343,7 +343,7 @@ mod tests {
         let heights: Vec<f32> = (0..side * side)
             .map(|i| ((i * 7919) % 101) as f32 / 100.0)
             .collect();
-        let field = HeightField::from_unit_heights(side, &heights, Wrap::Clamp).unwrap();
+        let field = HeightField::from_unit_heights(side, side, &heights, Wrap::Clamp).unwrap();
         let prism = Prism::<f64>::new(
             [
                 DVec3::ZERO,
@@ -423,7 +423,7 @@ mod tests {
     #[test]
     fn uv_degenerate_triangles_are_never_hit() {
         let mesh = crate::test_util::uv_line_triangle();
-        let field = HeightField::from_unit_heights(4, &[0.5; 16], Wrap::Clamp).unwrap();
+        let field = HeightField::from_unit_heights(4, 4, &[0.5; 16], Wrap::Clamp).unwrap();
         let surface = DisplacedSurface::new(mesh, field, 1.0, 1.0).unwrap();
         let ray = Ray::new(DVec3::new(0.2, 0.2, 2.0), DVec3::new(0.0, 0.0, -1.0)).unwrap();
         let mut stats = TraversalStats::default();

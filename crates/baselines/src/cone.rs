@@ -48,6 +48,17 @@ pub struct ConeMap {
     ratio: Vec<f32>,
 }
 
+/// The side of a cone-mapped height field.
+///
+/// # Panics
+/// On a map that is not square with a power-of-two side (cone maps are built over a square
+/// max pyramid; `HeightField::square_side`).
+fn square_side(field: &HeightField) -> usize {
+    field
+        .square_side()
+        .expect("cone maps are built for square maps with a power-of-two side")
+}
+
 /// Pyramid of sample maxima: level 0 the samples, level `l` the maxima of `2^l` squares.
 struct MaxPyramid {
     levels: Vec<Vec<u16>>,
@@ -55,7 +66,7 @@ struct MaxPyramid {
 
 impl MaxPyramid {
     fn new(field: &HeightField) -> Self {
-        let side = field.side();
+        let side = square_side(field);
         let mut levels = vec![field.samples().to_vec()];
         let mut n = side;
         while n > 1 {
@@ -86,13 +97,16 @@ impl ConeMap {
     /// // One spike of height 1 at (8, 8) on a flat map of height 0.5.
     /// let mut heights = vec![0.5; 16 * 16];
     /// heights[8 * 16 + 8] = 1.0;
-    /// let field = HeightField::from_unit_heights(16, &heights, Wrap::Clamp).unwrap();
+    /// let field = HeightField::from_unit_heights(16, 16, &heights, Wrap::Clamp).unwrap();
     /// let cones = ConeMap::new(&field);
     /// // Three texels from the spike, which is half a unit higher: ratio 3 / 0.5.
     /// assert!((cones.ratio(5, 8) - 6.0).abs() < 1e-3);
     /// // Nothing is higher than the spike.
     /// assert!(cones.ratio(8, 8) > 1e6);
     /// ```
+    ///
+    /// # Panics
+    /// On a map that is not square with a power-of-two side.
     #[must_use]
     pub fn new(field: &HeightField) -> Self {
         let builder = Self::builder(field);
@@ -105,6 +119,9 @@ impl ConeMap {
 
     /// A builder whose rows can be filled in any order or in parallel (the work is
     /// `O(samples x log(side))`: seconds at 4096^2 on one core).
+    ///
+    /// # Panics
+    /// On a map that is not square with a power-of-two side.
     #[must_use]
     pub fn builder(field: &HeightField) -> ConeMapBuilder<'_> {
         ConeMapBuilder {
@@ -141,7 +158,7 @@ impl ConeMapBuilder<'_> {
     /// Samples of the map (the length of the buffer [`ConeMapBuilder::finish`] takes).
     #[must_use]
     pub fn len(&self) -> usize {
-        self.field.side() * self.field.side()
+        square_side(self.field) * square_side(self.field)
     }
 
     /// Always false (maps have at least one sample).
@@ -153,7 +170,7 @@ impl ConeMapBuilder<'_> {
     /// Samples per row.
     #[must_use]
     pub fn row_len(&self) -> usize {
-        self.field.side()
+        square_side(self.field)
     }
 
     /// The cone map from its rows, each filled by [`ConeMapBuilder::fill_row`].
@@ -164,7 +181,7 @@ impl ConeMapBuilder<'_> {
     pub fn finish(self, ratio: Vec<f32>) -> ConeMap {
         assert_eq!(ratio.len(), self.len(), "one ratio per sample");
         ConeMap {
-            side: self.field.side(),
+            side: square_side(self.field),
             wrap: self.field.wrap(),
             ratio,
         }
@@ -177,7 +194,7 @@ impl ConeMapBuilder<'_> {
     /// coarsest ring (2 map sides away) the global maximum.
     pub fn fill_row(&self, j: usize, row: &mut [f32]) {
         let (field, pyramid) = (self.field, &self.pyramid);
-        let side = field.side() as i64;
+        let side = square_side(field) as i64;
         let wrap = field.wrap();
         let global = pyramid.levels.last().expect("top")[0];
         let index = |c: i64, n: i64| match wrap {
@@ -672,7 +689,7 @@ mod tests {
     fn cone_ratios_are_conservative_and_useful() {
         let side = 16i64;
         for wrap in [Wrap::Repeat, Wrap::Clamp] {
-            let field = HeightField::from_unit_heights(16, &wavy(16), wrap).unwrap();
+            let field = HeightField::from_unit_heights(16, 16, &wavy(16), wrap).unwrap();
             let cones = ConeMap::new(&field);
             let mut tight = 0;
             for j in 0..side {
@@ -758,7 +775,7 @@ mod tests {
             })
             .collect();
         let mesh = crate::test_util::unit_square(DVec3::Z, [[0, 1, 2], [0, 2, 3]]);
-        let field = HeightField::from_unit_heights(side, &heights, Wrap::Clamp).unwrap();
+        let field = HeightField::from_unit_heights(side, side, &heights, Wrap::Clamp).unwrap();
         let surface = DisplacedSurface::new(mesh, field, 0.3, 1.0).unwrap();
         for rectification in [Rectification::Ray, Rectification::Cone] {
             let opts = ConeOptions {
@@ -792,7 +809,7 @@ mod tests {
 
     #[test]
     fn degenerate_triangles_give_a_defined_outcome() {
-        let field = HeightField::from_unit_heights(4, &[0.5; 16], Wrap::Clamp).unwrap();
+        let field = HeightField::from_unit_heights(4, 4, &[0.5; 16], Wrap::Clamp).unwrap();
         let line = crate::test_util::world_line_triangle();
         let flat = DisplacedSurface::new(line, field.clone(), 1.0, 1.0).unwrap();
         let uv_line =

@@ -45,15 +45,20 @@ impl DistanceMap {
     /// // A single spike in the middle of a flat map at height 0.
     /// let mut heights = vec![0.0; 64 * 64];
     /// heights[32 * 64 + 32] = 1.0;
-    /// let field = HeightField::from_unit_heights(64, &heights, Wrap::Clamp).unwrap();
+    /// let field = HeightField::from_unit_heights(64, 64, &heights, Wrap::Clamp).unwrap();
     /// let map = DistanceMap::new(&field, 16, 64);
     /// // Far above a corner of the map: a long jump; next to the spike: none.
     /// assert!(map.radius_at(2.0f64, 2.0, 0.9) >= 10);
     /// assert_eq!(map.radius_at(32.5f64, 32.5, 0.5), 0);
     /// ```
+    ///
+    /// # Panics
+    /// On a map that is not square with a power-of-two side.
     #[must_use]
     pub fn new(field: &HeightField, layers: usize, max_cells: usize) -> Self {
-        let side = field.side();
+        let side = field
+            .square_side()
+            .expect("distance maps are built for square maps with a power-of-two side");
         let layers = layers.max(1);
         let mut cell_texels = 1;
         while side / cell_texels > max_cells.max(1) && side.is_multiple_of(cell_texels * 2) {
@@ -227,7 +232,7 @@ mod tests {
             })
             .collect();
         for wrap in [Wrap::Repeat, Wrap::Clamp] {
-            let field = HeightField::from_unit_heights(side, &heights, wrap).unwrap();
+            let field = HeightField::from_unit_heights(side, side, &heights, wrap).unwrap();
             let map = DistanceMap::new(&field, 12, 8);
             assert_eq!(map.cell_texels, 4);
             for layer in 0..12 {
@@ -254,7 +259,7 @@ mod tests {
         let heights: Vec<f32> = (0..side * side)
             .map(|k| ((k * 7919) % 97) as f32 / 97.0 * 0.6)
             .collect();
-        let field = HeightField::from_unit_heights(side, &heights, Wrap::Repeat).unwrap();
+        let field = HeightField::from_unit_heights(side, side, &heights, Wrap::Repeat).unwrap();
         let map = DistanceMap::new(&field, 20, 4);
         let mut jumps = 0;
         for layer in 0..20 {
@@ -283,7 +288,7 @@ mod tests {
 
     #[test]
     fn small_maps_use_texel_cells_and_absurd_input_gives_no_jump() {
-        let field = HeightField::from_unit_heights(4, &[0.1; 16], Wrap::Clamp).unwrap();
+        let field = HeightField::from_unit_heights(4, 4, &[0.1; 16], Wrap::Clamp).unwrap();
         let map = DistanceMap::new(&field, 8, 4);
         assert_eq!(map.cell_texels(), 1);
         assert!(map.radius_at(2.0f32, 2.0, 1.0) > 0);

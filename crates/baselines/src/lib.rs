@@ -33,7 +33,7 @@
 //!     vec![DVec2::ZERO, DVec2::X, DVec2::ONE, DVec2::Y],
 //!     vec![[0, 1, 2], [0, 2, 3]],
 //! ).unwrap();
-//! let field = HeightField::from_unit_heights(8, &[0.5f32; 64], Wrap::Clamp).unwrap();
+//! let field = HeightField::from_unit_heights(8, 8, &[0.5f32; 64], Wrap::Clamp).unwrap();
 //! let surface = DisplacedSurface::new(mesh, field, 1.0, 1.0).unwrap();
 //! let ray = Ray::new(DVec3::new(0.3, 0.6, 2.0), -DVec3::Z).unwrap();
 //! let mut stats = TraversalStats::default();

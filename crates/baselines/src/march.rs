@@ -620,7 +620,7 @@ mod tests {
     #[test]
     fn uv_degenerate_triangles_are_marched_too() {
         let mesh = crate::test_util::uv_line_triangle();
-        let field = HeightField::from_unit_heights(4, &[0.5; 16], Wrap::Clamp).unwrap();
+        let field = HeightField::from_unit_heights(4, 4, &[0.5; 16], Wrap::Clamp).unwrap();
         let surface = DisplacedSurface::new(mesh, field, 1.0, 1.0).unwrap();
         let ray = Ray::new(DVec3::new(0.2, 0.2, 2.0), DVec3::new(0.0, 0.0, -1.0)).unwrap();
         let mut stats = TraversalStats::default();
@@ -664,7 +664,7 @@ mod agreement {
             })
             .collect();
         let mesh = crate::test_util::unit_square(DVec3::Z, [[0, 2, 1], [0, 3, 2]]);
-        let field = HeightField::from_unit_heights(side, &heights, Wrap::Clamp).unwrap();
+        let field = HeightField::from_unit_heights(side, side, &heights, Wrap::Clamp).unwrap();
         let surface = DisplacedSurface::new(mesh, field, 0.3, 1.0).unwrap();
         let mut bad = 0;
         for k in 0..400 {
@@ -709,7 +709,7 @@ mod agreement {
             .collect();
         for (wrap, tiling) in [(Wrap::Clamp, 1.0), (Wrap::Repeat, 3.0)] {
             let mesh = crate::test_util::unit_square(DVec3::Z, [[0, 2, 1], [0, 3, 2]]);
-            let field = HeightField::from_unit_heights(side, &heights, wrap).unwrap();
+            let field = HeightField::from_unit_heights(side, side, &heights, wrap).unwrap();
             let map = crate::DistanceMap::new(&field, 16, 16);
             let surface = DisplacedSurface::new(mesh, field, 0.3, tiling).unwrap();
             let opts = MarchOptions::default();

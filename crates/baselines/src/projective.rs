@@ -234,7 +234,7 @@ mod tests {
                 0.5 + 0.3 * (5.0 * i).sin() * (4.0 * j).cos()
             })
             .collect();
-        let field = HeightField::from_unit_heights(side, &heights, Wrap::Clamp).unwrap();
+        let field = HeightField::from_unit_heights(side, side, &heights, Wrap::Clamp).unwrap();
         let exact = DisplacedSurface::new(mesh.clone(), field.clone(), 1.0, 1.0).unwrap();
         let pdm = ProjectiveSurface::new(&mesh, field, 1.0, 1.0).unwrap();
         let opts = MarchOptions::default();
@@ -267,7 +267,7 @@ mod tests {
             vec![[0, 1, 2]],
         )
         .unwrap();
-        let field = HeightField::from_unit_heights(4, &[0.5; 16], Wrap::Clamp).unwrap();
+        let field = HeightField::from_unit_heights(4, 4, &[0.5; 16], Wrap::Clamp).unwrap();
         let pdm = ProjectiveSurface::new(&mesh, field, 1.0, 1.0).unwrap();
         let ray = Ray::new(DVec3::new(0.5, 0.0, 2.0), DVec3::new(0.0, 0.0, -1.0)).unwrap();
         let mut st = TraversalStats::default();

@@ -46,7 +46,7 @@ pub(crate) fn world_line_triangle() -> BaseMesh<f64> {
 pub(crate) fn flat_map_square(height: f32) -> (DisplacedSurface<f64>, f64) {
     let mesh = unit_square(DVec3::Z, [[0, 1, 2], [0, 2, 3]]);
     let field =
-        HeightField::from_unit_heights(16, &[height; 256], Wrap::Clamp).expect("a valid map");
+        HeightField::from_unit_heights(16, 16, &[height; 256], Wrap::Clamp).expect("a valid map");
     let stored = f64::from(field.sample(0, 0)) / f64::from(HEIGHT_ONE);
     let surface = DisplacedSurface::new(mesh, field, 1.0, 1.0).expect("a valid surface");
     (surface, stored)

@@ -286,7 +286,7 @@ mod degenerate {
     /// a uv-degenerate one (a line in uv) is still a volume and is hit.
     #[test]
     fn world_degenerate_triangles_are_not_hit_uv_degenerate_ones_are() {
-        let field = HeightField::from_unit_heights(4, &[0.5; 16], Wrap::Clamp).unwrap();
+        let field = HeightField::from_unit_heights(4, 4, &[0.5; 16], Wrap::Clamp).unwrap();
         let line = crate::test_util::world_line_triangle();
         let flat = DisplacedSurface::new(line, field.clone(), 1.0, 1.0).unwrap();
         let uv_line = crate::test_util::uv_line_triangle();

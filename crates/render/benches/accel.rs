@@ -90,7 +90,7 @@ fn torus_mesh(n: usize) -> BaseMesh<f32> {
 fn builds(c: &mut Criterion) {
     let mut g = c.benchmark_group("build");
     let heights = scenes::fbm_map(4096, 4, 8, 11);
-    let field = HeightField::from_unit_heights(4096, &heights, Wrap::Repeat).unwrap();
+    let field = HeightField::from_unit_heights(4096, 4096, &heights, Wrap::Repeat).unwrap();
     eprintln!(
         "4096^2 map: samples + pyramid = {:.2} MB ({:.2} MiB)",
         field.memory_bytes() as f64 / 1e6,
@@ -117,7 +117,7 @@ fn builds(c: &mut Criterion) {
     });
     let mesh = torus_mesh(296);
     assert_eq!(mesh.triangle_count(), 175_232);
-    let small = HeightField::new(2, vec![0; 4], Wrap::Repeat).unwrap();
+    let small = HeightField::new(2, 2, vec![0; 4], Wrap::Repeat).unwrap();
     g.bench_function("tlas-175k", |b| {
         b.iter(|| {
             DisplacedSurface::new(mesh.clone(), small.clone(), 0.01f32, 1.0)
@@ -127,7 +127,7 @@ fn builds(c: &mut Criterion) {
         })
     });
     let boxes: Vec<_> = (0..mesh.triangle_count())
-        .map(|i| nlrt_accel::prism_bounds(&mesh.prism(i, 0.01, 1.0)))
+        .map(|i| nlrt_accel::prism_bounds(&mesh.prism(i, 0.01, [1.0; 2])))
         .collect();
     g.bench_function("bvh-only-175k", |b| {
         b.iter(|| nlrt_accel::Bvh4::build(black_box(&boxes), 1).node_count())

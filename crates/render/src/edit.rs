@@ -75,12 +75,11 @@ pub struct EditReport {
 /// One stroke: a raised (or lowered) cosine bump of `brush x brush` samples at `(x0, y0)`;
 /// returns the edited sample range `[x0, y0, x1, y1)`.
 fn stroke(field: &mut HeightField, brush: usize, rng: &mut Rng) -> [i64; 4] {
-    let side = field.side();
-    let brush = brush.min(side);
+    let (width, height) = (field.width(), field.height());
+    let brush = brush.min(width).min(height);
     // Uniform in 0..=side - brush (next_f64 < 1, so the product stays below the count).
-    let positions = (side - brush + 1) as f64;
-    let x0 = (rng.next_f64() * positions) as usize;
-    let y0 = (rng.next_f64() * positions) as usize;
+    let x0 = (rng.next_f64() * (width - brush + 1) as f64) as usize;
+    let y0 = (rng.next_f64() * (height - brush + 1) as f64) as usize;
     let amplitude = if rng.next_f64() < 0.5 {
         3000.0
     } else {
@@ -92,7 +91,7 @@ fn stroke(field: &mut HeightField, brush: usize, rng: &mut Rng) -> [i64; 4] {
             let r = |k: usize| (k as f64 + 0.5) / brush as f64 * 2.0 - 1.0;
             let d = (r(i) * r(i) + r(j) * r(j)).sqrt().min(1.0);
             let bump = amplitude * 0.5 * (1.0 + (std::f64::consts::PI * d).cos());
-            let s = &mut samples[(y0 + j) * side + x0 + i];
+            let s = &mut samples[(y0 + j) * width + x0 + i];
             *s = (f64::from(*s) + bump).clamp(0.0, f64::from(u16::MAX)) as u16;
         }
     }
@@ -121,7 +120,8 @@ pub fn run(opts: &EditOptions) -> Result<EditReport, String> {
     let Nonlinear::Displaced(mut surface) = Nonlinear::<f32>::new(&scene) else {
         return Err("mountain is not a displacement scene".into());
     };
-    let side = surface.field().side();
+    // The mountain's map is square.
+    let side = surface.field().width();
     let mut rng = Rng::stream(0x5eed);
     let mut partial = Vec::with_capacity(opts.strokes);
     for _ in 0..opts.strokes {
@@ -172,8 +172,13 @@ pub fn run(opts: &EditOptions) -> Result<EditReport, String> {
 /// its samples: how many, and how many hit at different distances.
 fn verify(scene: &Scene, updated: &DisplacedSurface<f32>) -> (usize, usize) {
     let field = updated.field();
-    let fresh_field = HeightField::new(field.side(), field.samples().to_vec(), field.wrap())
-        .expect("samples of a valid field");
+    let fresh_field = HeightField::new(
+        field.width(),
+        field.height(),
+        field.samples().to_vec(),
+        field.wrap(),
+    )
+    .expect("samples of a valid field");
     let fresh = DisplacedSurface::new(
         updated.mesh().clone(),
         fresh_field,

@@ -1000,11 +1000,23 @@ fn main() -> ExitCode {
                     ),
                 );
             }
+            // Methods the scene's map does not suit (a cone or distance map on a map that is
+            // not square with a power-of-two side) are left out, and said so; asked for alone,
+            // the reason is the error.
+            let (methods, unsupported): (Vec<Method>, Vec<Method>) =
+                methods.partition(|m| shell || m.supports(&built));
+            if let Some(first) = unsupported.first() {
+                let why = first.unsupported_reason(&built).unwrap_or_default();
+                if methods.is_empty() {
+                    return fail("watertight", format!("{scene}: {}: {why}", first.name()));
+                }
+                let names: Vec<&str> = unsupported.iter().map(|m| m.name()).collect();
+                eprintln!("{scene}: not judged: {} ({why})", names.join(", "));
+            }
             println!(
                 "| scene | method | rays | decided | leaks | rate | 95% interval | ghost hits (of hits judged) | grazing | too far | hit distance vs oracle: median / p99 / max rel. error (hits compared, unverified) | seconds |"
             );
             println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
-            let methods: Vec<Method> = methods.collect();
             let judged_hits = ghost_samples.map_or(watertight::JudgedHits::Every, |n| {
                 watertight::JudgedHits::Spaced {
                     ghosts: usize::try_from(n).unwrap_or(usize::MAX),

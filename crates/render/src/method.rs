@@ -229,10 +229,13 @@ impl Method {
             Method::GeometryImageF32 | Method::GeometryImageF64 => {
                 crate::resample::unsupported_reason(scene)
             }
-            Method::MarchingF32
-            | Method::MarchingF64
-            | Method::DistanceMapF32
-            | Method::DistanceMapF64 => None,
+            Method::MarchingF32 | Method::MarchingF64 => None,
+            Method::DistanceMapF32 | Method::DistanceMapF64 => match &scene.content {
+                Content::Displacement(field) if field.square_side().is_none() => {
+                    Some("distance maps are built for square maps with a power-of-two side")
+                }
+                _ => None,
+            },
             Method::ProjectiveF32 | Method::ProjectiveF64 => {
                 if !matches!(scene.content, Content::Displacement(_)) {
                     Some(
@@ -252,8 +255,15 @@ impl Method {
                 )
             }
             Method::ConeRayF32 | Method::ConeRayF64 | Method::ConeConeF32 | Method::ConeConeF64 => {
-                (!matches!(scene.content, Content::Displacement(_)))
-                    .then_some("cone tracing renders height fields, not instanced objects")
+                match &scene.content {
+                    Content::Shell(_) => {
+                        Some("cone tracing renders height fields, not instanced objects")
+                    }
+                    Content::Displacement(field) if field.square_side().is_none() => {
+                        Some("cone maps are built for square maps with a power-of-two side")
+                    }
+                    Content::Displacement(_) => None,
+                }
             }
             Method::EmbreeF32 | Method::EmbreeNativeF32 => {
                 if cfg!(feature = "embree") {

@@ -16,7 +16,10 @@ pub fn unsupported_reason(scene: &Scene) -> Option<&'static str> {
     let Content::Displacement(field) = &scene.content else {
         return Some("geometry images hold height fields, not instanced objects");
     };
-    let cells = scene.tiling * field.side() as f64;
+    let Some(side) = field.square_side() else {
+        return Some("the map is not square with a power-of-two side");
+    };
+    let cells = scene.tiling * side as f64;
     if !(cells.fract() == 0.0 && (cells as usize).is_power_of_two()) {
         return Some("the tiled map's side is not a power of two");
     }
@@ -52,7 +55,7 @@ pub fn geometry_image<T: Real>(scene: &Scene) -> Option<(GeometryImage<T>, Vec<u
     let Content::Displacement(field) = &scene.content else {
         return None;
     };
-    let n = (scene.tiling * field.side() as f64) as usize;
+    let n = (scene.tiling * field.width() as f64) as usize;
     let w = n + 1;
     let mut positions = vec![DVec3::splat(f64::NAN); w * w];
     let mut owner = vec![u32::MAX; w * w];

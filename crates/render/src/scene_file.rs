@@ -9,8 +9,8 @@
 //! material = "diffuse"        # optional: "diffuse" (default) or "glossy"
 //! [displacement]
 //! height_map = "height.png"   # grayscale PNG, 8 or 16 bits, or an EXR of heights in [0, 1]
-//!                             # (channel Y, else R, else the only one); square, side a
-//!                             # power of two
+//!                             # (channel Y, else R, else the only one); any width x height
+//!                             # from 2 x 2, traced as it is (no resampling)
 //! height_scale = 0.1
 //! tiling = 1.0                # optional, default 1
 //! midlevel = 0.0              # optional: the height that stays on the mesh, in [0, 1]
@@ -152,7 +152,7 @@ pub struct Source<'a> {
 /// A message naming the file (and line) for: an unreadable file, TOML syntax, an unknown key,
 /// a bad value, a missing section; a malformed OBJ, an OBJ without texture coordinates, NaN or
 /// infinite vertices, triangles degenerate in both world and uv space; a height map that is
-/// not a grayscale 8/16-bit PNG or not square with a power-of-two side; an object outside the
+/// not a grayscale 8/16-bit PNG or an EXR of heights in [0, 1], or of a side below 2 or above the largest; an object outside the
 /// unit tile.
 pub fn load(path: &Path) -> Result<Scene, String> {
     let read = |p: &Path| std::fs::read(p).map_err(|e| format!("{}: {e}", p.display()));
@@ -206,8 +206,13 @@ pub fn load_from(path: &Path, source: &Source<'_>) -> Result<Scene, String> {
             let mut field = load_height_map(&dir.join(&d.height_map), source)?;
             if let WrapName::Clamp = d.wrap {
                 // The samples were valid under one wrap, so they are under the other.
-                field = HeightField::new(field.side(), field.samples().to_vec(), Wrap::Clamp)
-                    .map_err(|e| format!("{}: {e}", path.display()))?;
+                field = HeightField::new(
+                    field.width(),
+                    field.height(),
+                    field.samples().to_vec(),
+                    Wrap::Clamp,
+                )
+                .map_err(|e| format!("{}: {e}", path.display()))?;
             }
             (
                 Content::Displacement(field),
@@ -622,10 +627,7 @@ fn load_height_map(path: &Path, source: &Source<'_>) -> Result<HeightField, Stri
             )));
         }
     };
-    if w != h {
-        return Err(err(format!("height map is {w} x {h}; it must be square")));
-    }
-    HeightField::new(w, samples, Wrap::Repeat).map_err(|e| err(e.to_string()))
+    HeightField::new(w, h, samples, Wrap::Repeat).map_err(|e| err(e.to_string()))
 }
 
 /// An OpenEXR height map: one channel (`Y`, else `R`, else the only one) of heights in
@@ -663,9 +665,6 @@ fn load_exr_height_map(path: &Path, bytes: &[u8], max_side: usize) -> Result<Hei
                 names.join(", ")
             ))
         })?;
-    if w != h {
-        return Err(err(format!("height map is {w} x {h}; it must be square")));
-    }
     let mut samples = Vec::with_capacity(w * h);
     for (i, v) in channel.sample_data.values_as_f32().enumerate() {
         if !(0.0..=1.0).contains(&v) {
@@ -677,7 +676,7 @@ fn load_exr_height_map(path: &Path, bytes: &[u8], max_side: usize) -> Result<Hei
         }
         samples.push((f64::from(v) * f64::from(u16::MAX)).round() as u16);
     }
-    HeightField::new(w, samples, Wrap::Repeat).map_err(|e| err(e.to_string()))
+    HeightField::new(w, h, samples, Wrap::Repeat).map_err(|e| err(e.to_string()))
 }
 
 /// Writes `scene` as a scene file `<dir>/<name>.toml` with its OBJ base mesh and its PNG
@@ -711,8 +710,8 @@ pub fn export(scene: &Scene, dir: &Path) -> Result<PathBuf, String> {
         Content::Displacement(field) => {
             let path = dir.join(format!("{name}-height.png"));
             let file = std::fs::File::create(&path).map_err(|e| io(&path, e))?;
-            let side = field.side() as u32;
-            let mut encoder = png::Encoder::new(std::io::BufWriter::new(file), side, side);
+            let (width, height) = (field.width() as u32, field.height() as u32);
+            let mut encoder = png::Encoder::new(std::io::BufWriter::new(file), width, height);
             encoder.set_color(png::ColorType::Grayscale);
             encoder.set_depth(png::BitDepth::Sixteen);
             let bytes: Vec<u8> = field

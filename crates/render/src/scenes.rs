@@ -60,7 +60,10 @@ impl Content {
     #[must_use]
     pub fn describe(&self) -> String {
         match self {
-            Content::Displacement(f) => format!("{}^2 height map", f.side()),
+            Content::Displacement(f) if f.width() == f.height() => {
+                format!("{}^2 height map", f.width())
+            }
+            Content::Displacement(f) => format!("{} x {} height map", f.width(), f.height()),
             Content::Shell(t) => format!("instanced object of {} triangles", t.len()),
         }
     }
@@ -126,10 +129,12 @@ pub const SEAM_SCENES: [&str; 2] = ["seam-cube", "seam-sphere"];
 /// renders: `mountain-grazing` (the mountain seen at grazing angles), `fur-cones` (the fur's
 /// torus under broad cones, [`fur_cones`]), `fig9-displaced` (Fig.
 /// 9's columns with a height map), the ghost-hit tori ([`ghost_torus`]) and the seam scenes
-/// ([`SEAM_SCENES`]), the coarse tori ([`COARSE_TORI`]), and `mountain-midlevel` and
+/// ([`SEAM_SCENES`]), the coarse tori ([`COARSE_TORI`]), `mountain-midlevel` and
 /// `torus-midlevel` (the mountain and the torus with midlevel 0.5: the maps push in and out),
-/// for `nlrt watertight`, and usable everywhere a scene is.
-pub const VARIANT_NAMES: [&str; 19] = [
+/// and `dem-crop` ([`dem_crop`]: a map neither square nor a power of two), for
+/// `nlrt watertight`, and usable everywhere a scene is.
+pub const VARIANT_NAMES: [&str; 20] = [
+    "dem-crop",
     "mountain-midlevel",
     "torus-midlevel",
     COARSE_TORI[0].0,
@@ -242,6 +247,7 @@ pub fn builtin(name: &str, size: Size) -> Option<Scene> {
             scene.midlevel = 0.5;
             Some(scene)
         }
+        "dem-crop" => Some(dem_crop(if size == Size::Small { 150 } else { 601 })),
         "scales" => Some(scales()),
         "fig9" => Some(fig9()),
         "fig9-displaced" => Some(fig9_displaced(map(1024, 256))),
@@ -346,7 +352,33 @@ pub fn spike_map(side: usize, cells: usize, radius: f64, seed: u64) -> Vec<f32> 
 }
 
 fn field(side: usize, heights: &[f32]) -> HeightField {
-    HeightField::from_unit_heights(side, heights, Wrap::Repeat).expect("power-of-two side")
+    HeightField::from_unit_heights(side, side, heights, Wrap::Repeat).expect("power-of-two side")
+}
+
+/// A terrain as a DEM export gives it: `width x (width * 383 / 601)` samples (601 x 383 at the
+/// paper's size, neither square nor a power of two on either side), cropped from the
+/// mountain's fBm terrain with no resampling, clamped at its edges (a terrain does not
+/// repeat), on a quad of the same aspect seen from the mountain's camera.
+#[must_use]
+pub fn dem_crop(width: usize) -> Scene {
+    let height = (width * 383 / 601).max(2);
+    let side = width.next_power_of_two();
+    let terrain = fbm_map(side, 4, 8, 11);
+    let (x0, y0) = ((side - width) / 3, (side - height) / 2);
+    let heights: Vec<f32> = (0..width * height)
+        .map(|k| terrain[(y0 + k / width) * side + x0 + k % width])
+        .collect();
+    let map = HeightField::from_unit_heights(width, height, &heights, Wrap::Clamp)
+        .expect("a size within the limits");
+    // The mountain's quad, camera and light (its own map, small, is replaced).
+    let mut scene = mountain(64);
+    let aspect = height as f64 / width as f64;
+    for p in &mut scene.positions {
+        p.z *= aspect;
+    }
+    scene.name = "dem-crop";
+    scene.content = Content::Displacement(map);
+    scene
 }
 
 /// (a) Mountain: 2 base triangles, an fBm map.
@@ -970,7 +1002,7 @@ fn torus_variant(
     map: HeightField,
     height_scale: f64,
 ) -> Scene {
-    let mut scene = torus_scene(map.side());
+    let mut scene = torus_scene(map.width());
     scene.name = name;
     scene.positions = positions;
     scene.normals = normals;
@@ -1190,7 +1222,8 @@ pub fn fig9_displaced(side: usize) -> Scene {
     let mut scene = fig9();
     scene.name = "fig9-displaced";
     scene.content = Content::Displacement(
-        HeightField::from_unit_heights(side, &heights, Wrap::Clamp).expect("power-of-two side"),
+        HeightField::from_unit_heights(side, side, &heights, Wrap::Clamp)
+            .expect("power-of-two side"),
     );
     scene.height_scale = 0.4;
     // All seven columns in a square view (the watertightness grid is square).
@@ -1300,7 +1333,7 @@ pub fn highpoly(n: usize) -> Scene {
 /// A non-periodic fBm map (clamped at the border) for the seam scenes: the cells of an atlas
 /// hold unrelated relief, so the heights on the two sides of a seam differ.
 fn atlas_map(side: usize, seed: u64) -> HeightField {
-    HeightField::from_unit_heights(side, &fbm_map(side, 8, 6, seed), Wrap::Clamp)
+    HeightField::from_unit_heights(side, side, &fbm_map(side, 8, 6, seed), Wrap::Clamp)
         .expect("power-of-two side")
 }
 
@@ -1431,7 +1464,7 @@ mod tests {
             let Content::Displacement(field) = &scene.content else {
                 panic!("{name} is a displacement scene")
             };
-            assert_eq!(field.side(), MIN_MAP_SIDE, "{name}");
+            assert_eq!([field.width(), field.height()], [MIN_MAP_SIDE; 2], "{name}");
         }
         let paper = builtin("cornell", Size::Paper).unwrap();
         let swept = builtin("cornell", size).unwrap();

@@ -55,7 +55,8 @@ fn seam_walls(
     (floor, normals): (&[DVec3], &[DVec3]),
     field: &HeightField,
 ) -> Vec<([DVec3; 3], u32)> {
-    let texels = scene.tiling * field.side() as f64;
+    // Texels per unit of uv along u and v.
+    let texels = DVec2::new(field.width() as f64, field.height() as f64) * scene.tiling;
     let mut out = Vec::new();
     for edge in seams.edges() {
         // Each side's edge ends in texel units, in the first side's order.
@@ -151,10 +152,11 @@ impl Tessellated {
     }
 
     fn build(scene: &Scene, curved: bool) -> Self {
-        // Cells: texels of the height map, or tiles of the object (in uv units times tiling).
+        // Cells: texels of the height map (per axis), or tiles of the object (in uv units
+        // times tiling).
         let cells_per_tile = match &scene.content {
-            Content::Displacement(field) => field.side() as f64,
-            Content::Shell(_) => 1.0,
+            Content::Displacement(field) => DVec2::new(field.width() as f64, field.height() as f64),
+            Content::Shell(_) => DVec2::ONE,
         };
         let scale = scene.tiling * cells_per_tile;
         // Seams closed as nonlinear tracing closes them (`nlrt_accel::SeamRule`): welded

@@ -258,13 +258,13 @@ fn find(parent: &mut [u32], mut i: u32) -> u32 {
 }
 
 impl<T: Real> AffinePatches<T> {
-    /// The patches of `mesh` displaced by `height_scale` with uvs times `tiling`, on a map of
-    /// `side` texels per unit.
-    pub(crate) fn find(mesh: &BaseMesh<T>, height_scale: T, tiling: T, side: usize) -> Self {
+    /// The patches of `mesh` displaced by `height_scale` with uvs times `uv_scale`, on a grid
+    /// of `side` texels per unit.
+    pub(crate) fn find(mesh: &BaseMesh<T>, height_scale: T, uv_scale: [T; 2], side: usize) -> Self {
         let count = mesh.triangle_count();
         let side_f = side as f64;
         let prisms: Vec<Prism<T>> = (0..count)
-            .map(|i| mesh.prism(i, height_scale, tiling))
+            .map(|i| mesh.prism(i, height_scale, uv_scale))
             .collect();
         let frames: Vec<Option<TexelFrame>> = prisms
             .iter()
