@@ -91,6 +91,8 @@ pub struct HeightField {
     /// Square, a power of two on the side, and repeated: nodes of the infinite grid are
     /// stored nodes, read through masks (the walks' fast path).
     square_power_of_two: bool,
+    /// Repeated, both sides powers of two: sample indices wrap by masks.
+    masked: bool,
     samples: Vec<u16>,
     /// `pyramid[k]` holds level `k + 2`.
     pyramid: Vec<Level>,
@@ -144,6 +146,7 @@ impl HeightField {
             top,
             wrap,
             square_power_of_two: width == height && width.is_power_of_two() && wrap == Wrap::Repeat,
+            masked: width.is_power_of_two() && height.is_power_of_two() && wrap == Wrap::Repeat,
             samples,
             pyramid: Vec::new(),
             range: [0, 0],
@@ -250,12 +253,14 @@ impl HeightField {
     #[inline]
     fn wrap_along(&self, i: i64, n: usize) -> usize {
         let n = n as i64;
-        match self.wrap {
+        if self.masked {
             // A power of two: the mask is `rem_euclid` (two's complement) without a division,
             // which the walk would pay per sample read.
-            Wrap::Repeat if n & (n - 1) == 0 => (i & (n - 1)) as usize,
-            Wrap::Repeat => i.rem_euclid(n) as usize,
-            Wrap::Clamp => i.clamp(0, n - 1) as usize,
+            (i & (n - 1)) as usize
+        } else if self.wrap == Wrap::Repeat {
+            i.rem_euclid(n) as usize
+        } else {
+            i.clamp(0, n - 1) as usize
         }
     }
 

@@ -8,13 +8,16 @@
 //! obj = "base.obj"
 //! material = "diffuse"        # optional: "diffuse" (default) or "glossy"
 //! [displacement]
-//! height_map = "height.png"   # grayscale PNG, 8 or 16 bits, or an EXR of heights in [0, 1]
-//!                             # (channel Y, else R, else the only one); any width x height
-//!                             # from 2 x 2, traced as it is (no resampling)
+//! height_map = "height.png"   # grayscale PNG (8 or 16 bits), EXR (channel Y, else R, else
+//!                             # the only one) or grayscale TIFF (integers or floats, a DEM
+//!                             # export); any width x height from 2 x 2, traced as it is
+//!                             # (no resampling)
 //! height_scale = 0.1
 //! tiling = 1.0                # optional, default 1
 //! midlevel = 0.0              # optional: the height that stays on the mesh, in [0, 1]
 //!                             # (0: the map pushes out only; 0.5: in and out alike)
+//! normalize = false           # optional: map an EXR's or TIFF's range onto [0, 1] (a DEM
+//!                             # in metres); without it their heights must lie in [0, 1]
 //! [camera]
 //! eye = [0.0, 1.0, 3.0]
 //! target = [0.0, 0.0, 0.0]
@@ -103,6 +106,8 @@ struct DisplacementSection {
     wrap: WrapName,
     #[serde(default)]
     midlevel: f64,
+    #[serde(default)]
+    normalize: bool,
 }
 
 #[derive(Deserialize)]
@@ -203,7 +208,7 @@ pub fn load_from(path: &Path, source: &Source<'_>) -> Result<Scene, String> {
                 d.tiling.is_finite() && d.tiling > 0.0 && d.tiling <= 1e6,
             )?;
             check("midlevel", d.midlevel, (0.0..=1.0).contains(&d.midlevel))?;
-            let mut field = load_height_map(&dir.join(&d.height_map), source)?;
+            let mut field = load_height_map(&dir.join(&d.height_map), source, d.normalize)?;
             if let WrapName::Clamp = d.wrap {
                 // The samples were valid under one wrap, so they are under the other.
                 field = HeightField::new(
@@ -571,15 +576,23 @@ fn check_map_size(w: usize, h: usize, max_side: usize) -> Result<(), String> {
     Ok(())
 }
 
-/// A grayscale PNG (8 or 16 bits), or an OpenEXR file (by its extension), as a height field.
-fn load_height_map(path: &Path, source: &Source<'_>) -> Result<HeightField, String> {
+/// A grayscale PNG (8 or 16 bits), an OpenEXR file or a grayscale TIFF (by the extension) as
+/// a height field. Values of EXR and TIFF files must lie in `[0, 1]`, or `normalize` maps the
+/// file's range onto it.
+fn load_height_map(
+    path: &Path,
+    source: &Source<'_>,
+    normalize: bool,
+) -> Result<HeightField, String> {
     let err = |m: String| format!("{}: {m}", path.display());
     let bytes = (source.read)(path)?;
-    if path
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("exr"))
-    {
-        return load_exr_height_map(path, &bytes, source.max_map_side);
+    let extension = path.extension().map(|e| e.to_ascii_lowercase());
+    match extension.as_ref().and_then(|e| e.to_str()) {
+        Some("exr") => return load_exr_height_map(path, &bytes, source.max_map_side, normalize),
+        Some("tif" | "tiff") => {
+            return load_tiff_height_map(path, &bytes, source.max_map_side, normalize);
+        }
+        _ => {}
     }
     let mut decoder = png::Decoder::new(std::io::Cursor::new(bytes.as_slice()));
     decoder.set_transformations(png::Transformations::IDENTITY);
@@ -633,7 +646,12 @@ fn load_height_map(path: &Path, source: &Source<'_>) -> Result<HeightField, Stri
 /// An OpenEXR height map: one channel (`Y`, else `R`, else the only one) of heights in
 /// `[0, 1]`, quantised to the 16-bit samples the height field stores (the nearest of 65,536
 /// levels: a relative step of 1.5e-5 of the height scale).
-fn load_exr_height_map(path: &Path, bytes: &[u8], max_side: usize) -> Result<HeightField, String> {
+fn load_exr_height_map(
+    path: &Path,
+    bytes: &[u8],
+    max_side: usize,
+    normalize: bool,
+) -> Result<HeightField, String> {
     use exr::prelude::*;
     let err = |m: String| format!("{}: {m}", path.display());
     // The header first: a small file may claim any size, and reading it would allocate that.
@@ -665,18 +683,113 @@ fn load_exr_height_map(path: &Path, bytes: &[u8], max_side: usize) -> Result<Hei
                 names.join(", ")
             ))
         })?;
-    let mut samples = Vec::with_capacity(w * h);
-    for (i, v) in channel.sample_data.values_as_f32().enumerate() {
-        if !(0.0..=1.0).contains(&v) {
+    let values: Vec<f64> = channel.sample_data.values_as_f32().map(f64::from).collect();
+    let samples = unit_samples(&values, w, normalize).map_err(err)?;
+    HeightField::new(w, h, samples, Wrap::Repeat).map_err(|e| err(e.to_string()))
+}
+
+/// A grayscale TIFF height map (one sample per pixel: 8-, 16-, 32- or 64-bit integers or
+/// 16-, 32- or 64-bit floats, the usual DEM export), through the `tiff` crate. Integer
+/// images are read as fractions of their type's range (as PNG samples are); float images
+/// are heights, in `[0, 1]` or normalised from the file's range by `normalize`.
+fn load_tiff_height_map(
+    path: &Path,
+    bytes: &[u8],
+    max_side: usize,
+    normalize: bool,
+) -> Result<HeightField, String> {
+    use tiff::decoder::{Decoder, DecodingResult, Limits};
+    let err = |m: String| format!("{}: {m}", path.display());
+    let unreadable = |e: tiff::TiffError| err(format!("not a readable TIFF file: {e}"));
+    let mut decoder = Decoder::new(std::io::Cursor::new(bytes)).map_err(unreadable)?;
+    // The header first: a small file may claim any size, and decoding would allocate it.
+    let (w, h) = decoder.dimensions().map_err(unreadable)?;
+    let (w, h) = (w as usize, h as usize);
+    check_map_size(w, h, max_side).map_err(err)?;
+    match decoder.colortype().map_err(unreadable)? {
+        tiff::ColorType::Gray(_) => {}
+        other => {
             return Err(err(format!(
-                "height {v} at pixel ({}, {}) is outside [0, 1] (scale heights with height_scale)",
-                i % w,
-                i / w
+                "height maps must be grayscale (one sample per pixel); this TIFF is {other:?}"
             )));
         }
-        samples.push((f64::from(v) * f64::from(u16::MAX)).round() as u16);
     }
+    // Room for the largest map in the widest sample type (64 bits), no more.
+    let mut limits = Limits::default();
+    limits.decoding_buffer_size = max_side * max_side * 8;
+    limits.intermediate_buffer_size = limits.decoding_buffer_size;
+    let mut decoder = decoder.with_limits(limits);
+    let fraction = |v: f64, max: f64| v / max;
+    let values: Vec<f64> = match decoder.read_image().map_err(unreadable)? {
+        DecodingResult::U8(v) => v.iter().map(|&x| fraction(f64::from(x), 255.0)).collect(),
+        DecodingResult::U16(v) => v.iter().map(|&x| fraction(f64::from(x), 65535.0)).collect(),
+        DecodingResult::U32(v) => v
+            .iter()
+            .map(|&x| fraction(f64::from(x), f64::from(u32::MAX)))
+            .collect(),
+        DecodingResult::U64(v) => v
+            .iter()
+            .map(|&x| fraction(x as f64, u64::MAX as f64))
+            .collect(),
+        DecodingResult::F16(v) => v.iter().map(|&x| f64::from(x)).collect(),
+        DecodingResult::F32(v) => v.iter().map(|&x| f64::from(x)).collect(),
+        DecodingResult::F64(v) => v,
+        DecodingResult::I8(_)
+        | DecodingResult::I16(_)
+        | DecodingResult::I32(_)
+        | DecodingResult::I64(_) => {
+            return Err(err(
+                "signed integer TIFFs are not read: export heights as unsigned integers or floats"
+                    .into(),
+            ));
+        }
+    };
+    if values.len() != w * h {
+        return Err(err(format!(
+            "the TIFF holds {} samples for {w} x {h} pixels (one grayscale sample per pixel)",
+            values.len()
+        )));
+    }
+    let samples = unit_samples(&values, w, normalize).map_err(err)?;
     HeightField::new(w, h, samples, Wrap::Repeat).map_err(|e| err(e.to_string()))
+}
+
+/// Heights (row-major, `width` per row) as 16-bit samples: each in `[0, 1]`, or with
+/// `normalize` the file's range mapped onto `[0, 1]` (a DEM in metres). A value that is not
+/// finite (a DEM's no-data) or, without `normalize`, outside `[0, 1]` is one message naming
+/// the pixel and the file's range.
+fn unit_samples(values: &[f64], width: usize, normalize: bool) -> Result<Vec<u16>, String> {
+    let pixel = |i: usize| format!("({}, {})", i % width, i / width);
+    if let Some(i) = values.iter().position(|v| !v.is_finite()) {
+        return Err(format!(
+            "height {} at pixel {} is not a finite number (fill a DEM's no-data pixels first)",
+            values[i],
+            pixel(i)
+        ));
+    }
+    let (lo, hi) = values
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| {
+            (lo.min(v), hi.max(v))
+        });
+    let (offset, span) = if normalize {
+        (lo, if hi > lo { hi - lo } else { 1.0 })
+    } else {
+        if let Some(i) = values.iter().position(|v| !(0.0..=1.0).contains(v)) {
+            return Err(format!(
+                "height {} at pixel {} is outside [0, 1]; the file's heights span [{lo}, {hi}]: scale them into [0, 1], or set normalize = true in [displacement] to map that range onto it (height_scale is then the world height of {})",
+                values[i],
+                pixel(i),
+                hi - lo
+            ));
+        }
+        (0.0, 1.0)
+    };
+    let unit = f64::from(u16::MAX);
+    Ok(values
+        .iter()
+        .map(|v| (((v - offset) / span).clamp(0.0, 1.0) * unit).round() as u16)
+        .collect())
 }
 
 /// Writes `scene` as a scene file `<dir>/<name>.toml` with its OBJ base mesh and its PNG

@@ -278,7 +278,7 @@ fn bad_exr_height_maps_are_rejected() {
             "nan",
             "Y",
             |h| h[7] = f32::NAN,
-            &["bumps.exr", "outside [0, 1]"],
+            &["bumps.exr", "not a finite number", "(7, 0)"],
         ),
         ("channel", "R", |_| {}, &[]), // R is accepted
         ("broken", "Y", |_| {}, &["bumps.exr", "OpenEXR"]),
@@ -672,4 +672,110 @@ fn a_midlevel_renders_is_judged_and_is_checked() {
         );
         expect_error(&dir, &["bumps.toml", "midlevel", "out of range"]);
     }
+}
+
+/// The example's 16-bit PNG samples and size.
+fn png_samples(png_path: &Path) -> (Vec<u16>, u32, u32) {
+    let mut decoder = png::Decoder::new(std::io::BufReader::new(
+        std::fs::File::open(png_path).unwrap(),
+    ));
+    decoder.set_transformations(png::Transformations::IDENTITY);
+    let mut reader = decoder.read_info().unwrap();
+    let mut buf = vec![0; reader.output_buffer_size().unwrap()];
+    let info = reader.next_frame(&mut buf).unwrap();
+    let n = (info.width * info.height) as usize;
+    let samples = match info.bit_depth {
+        png::BitDepth::Sixteen => buf[..2 * n]
+            .chunks_exact(2)
+            .map(|c| u16::from_be_bytes([c[0], c[1]]))
+            .collect(),
+        _ => buf[..n].iter().map(|&c| u16::from(c) * 257).collect(),
+    };
+    (samples, info.width, info.height)
+}
+
+/// Writes a TIFF of colour type `C` (`tiff`'s encoder).
+fn write_tiff<C: tiff::encoder::colortype::ColorType>(
+    path: &Path,
+    w: u32,
+    h: u32,
+    data: &[C::Inner],
+) where
+    [C::Inner]: tiff::encoder::TiffValue,
+{
+    let file = std::fs::File::create(path).unwrap();
+    let mut encoder = tiff::encoder::TiffEncoder::new(file).unwrap();
+    encoder.write_image::<C>(w, h, data).unwrap();
+}
+
+/// A 16-bit grayscale TIFF of the example's samples renders exactly like the PNG; a DEM in
+/// metres (32-bit floats, 800 to 2000 m) renders with `normalize = true`, which maps its range
+/// onto [0, 1], and is one message naming that range without it.
+#[test]
+fn tiff_height_maps_render_like_the_png_and_dems_normalise() {
+    use tiff::encoder::colortype::{Gray16, Gray32Float};
+    let dir = scratch("tiff");
+    let (samples, w, h) = png_samples(&dir.join("bumps.png"));
+    write_tiff::<Gray16>(&dir.join("bumps.tif"), w, h, &samples);
+    let render_to = |name: &str| {
+        let out = dir.join(name);
+        let o = nlrt(&[
+            "render",
+            dir.join("bumps.toml").to_str().unwrap(),
+            "--size",
+            "48x36",
+            "--precision",
+            "f64",
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        std::fs::read(out).unwrap()
+    };
+    let from_png = render_to("png.png");
+    edit(&dir, "bumps.toml", "\"bumps.png\"", "\"bumps.tif\"");
+    assert_eq!(render_to("tif.png"), from_png);
+    // A DEM: heights in metres, the sample range stretched to [800, 2000] exactly, so that
+    // normalising gives the PNG's heights back (to f32 rounding of the metres).
+    let (lo, hi) = (
+        f32::from(*samples.iter().min().unwrap()),
+        f32::from(*samples.iter().max().unwrap()),
+    );
+    let metres: Vec<f32> = samples
+        .iter()
+        .map(|&s| 800.0 + 1200.0 * (f32::from(s) - lo) / (hi - lo))
+        .collect();
+    write_tiff::<Gray32Float>(&dir.join("bumps.tif"), w, h, &metres);
+    expect_error(
+        &dir,
+        &[
+            "bumps.tif",
+            "outside [0, 1]",
+            "[800, 2000]",
+            "normalize = true",
+        ],
+    );
+    edit(
+        &dir,
+        "bumps.toml",
+        "tiling = 2.0",
+        "tiling = 2.0\nnormalize = true",
+    );
+    let _ = render_to("dem.png");
+    // No-data pixels, colour, signed integers and an absurd size are one message each.
+    let mut holes = metres.clone();
+    holes[3] = f32::NAN;
+    write_tiff::<Gray32Float>(&dir.join("bumps.tif"), w, h, &holes);
+    expect_error(
+        &dir,
+        &["bumps.tif", "not a finite number", "(3, 0)", "no-data"],
+    );
+    write_tiff::<tiff::encoder::colortype::RGB8>(&dir.join("bumps.tif"), 2, 2, &[0; 12]);
+    expect_error(&dir, &["bumps.tif", "grayscale"]);
+    write_tiff::<tiff::encoder::colortype::GrayI16>(&dir.join("bumps.tif"), 2, 2, &[0; 4]);
+    expect_error(&dir, &["bumps.tif", "signed"]);
+    write_tiff::<Gray32Float>(&dir.join("bumps.tif"), 20_000, 1, &vec![0.5; 20_000]);
+    expect_error(&dir, &["bumps.tif", "20000 x 1", "largest side"]);
+    std::fs::write(dir.join("bumps.tif"), b"II*\0 not a tiff").unwrap();
+    expect_error(&dir, &["bumps.tif", "TIFF"]);
 }
