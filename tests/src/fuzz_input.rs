@@ -287,12 +287,25 @@ fn check_traversal_hit<T: Real>(h: &nlrt_shellmap::Hit<T>, context: &dyn core::f
 const BRUTE_FORCE_CELLS: i64 = 4096;
 
 /// The height map that leads a traversal input: a header byte (side 2 to 16, wrap mode,
-/// tiling 1 to 4), then the samples as little-endian 16-bit values (missing bytes read as 0);
-/// with the bytes after them.
-fn map_of<T: Real>(data: &[u8]) -> (nlrt_accel::HeightField, T, &[u8]) {
+/// tiling 1 to 4, and with `any_size` its top three bits making the map narrower by up to three
+/// samples and, with the top bit, about half as high: sizes that are neither square nor powers
+/// of two; 0 there keeps the square map, which every older unit of the displacement target
+/// has), then the samples as little-endian 16-bit values (missing bytes read as 0); with the
+/// bytes after them.
+fn map_of<T: Real>(data: &[u8], any_size: bool) -> (nlrt_accel::HeightField, T, &[u8]) {
     use nlrt_accel::{HeightField, Wrap};
     let header = data.first().copied().unwrap_or(0);
     let side = 2usize << (header & 3);
+    let (width, height) = if any_size {
+        let narrower = usize::from((header >> 5) & 3);
+        let lower = header & 0x80 != 0;
+        (
+            side.saturating_sub(narrower).max(2),
+            if lower { side / 2 + 1 } else { side },
+        )
+    } else {
+        (side, side)
+    };
     let wrap = if header & 4 == 0 {
         Wrap::Repeat
     } else {
@@ -300,17 +313,17 @@ fn map_of<T: Real>(data: &[u8]) -> (nlrt_accel::HeightField, T, &[u8]) {
     };
     let tiling = T::from_i32(i32::from((header >> 3) & 3) + 1);
     let sample_bytes = data.get(1..).unwrap_or(&[]);
-    let samples = (0..side * side)
+    let samples = (0..width * height)
         .map(|i| {
             let b = |k: usize| u16::from(sample_bytes.get(2 * i + k).copied().unwrap_or(0));
             b(0) | (b(1) << 8)
         })
         .collect();
-    let field = HeightField::new(side, side, samples, wrap).expect("valid side");
+    let field = HeightField::new(width, height, samples, wrap).expect("sides from 2 to 16");
     (
         field,
         tiling,
-        data.get(1 + 2 * side * side..).unwrap_or(&[]),
+        data.get(1 + 2 * width * height..).unwrap_or(&[]),
     )
 }
 
@@ -364,11 +377,20 @@ pub fn displacement_parts<T: Real>(
     ),
     String,
 > {
-    let (field, tiling, rest) = map_of::<T>(data);
+    let (field, tiling, rest) = map_of::<T>(data, true);
     let x = decode::<T, 30>(rest).coeffs;
     let (mesh, ray) = base_and_ray(&x).ok_or("no valid base triangle and ray")?;
     Ok((mesh, field, tiling, ray))
 }
+
+/// Texels of a triangle's range up to which [`fuzz_displacement`] also traces the
+/// tessellation-free baseline: its work grows with the area of that range where its world
+/// boxes do not prune (`fuzz/slow/displacement_f32/affine-range-walk*`: up to 415M texel tests,
+/// 55 s in release), which stopped every 600-second libFuzzer run of `displacement_f32` on a
+/// slow input. 2^22 texels is about half a second in release (8.9M took 1.0 s), a few seconds
+/// under ASan: the baseline is still checked on most inputs, and the fuzzer's time goes to the
+/// nonlinear walks, whose cost follows the texels the ray crosses.
+pub const AFFINE_BASELINE_CELLS: i64 = 1 << 22;
 
 /// The displacement traversal target: a small height map (side 2 to 16, any samples, either
 /// wrap mode, tiling 1 to 4), one base triangle and a ray, all from raw bytes. No panic; a hit
@@ -416,7 +438,9 @@ pub fn fuzz_displacement<T: Real>(data: &[u8]) {
     }
     // The competing methods on the same surface: no panic, and any hit finite and ahead.
     let mut stats = TraversalStats::default();
-    if let Some(h) = surface.intersect_affine(&ray, T::ZERO, T::INFINITY, &mut stats) {
+    if (x1 - x0 + 1) * (y1 - y0 + 1) <= AFFINE_BASELINE_CELLS
+        && let Some(h) = surface.intersect_affine(&ray, T::ZERO, T::INFINITY, &mut stats)
+    {
         assert!(h.t.is_finite() && h.t > T::ZERO, "tessellation-free {h:?}");
     }
     let opts = nlrt_baselines::MarchOptions {
@@ -465,7 +489,7 @@ pub fn seam_case<T: Real>(
 )> {
     use nlrt_accel::{BaseMesh, DisplacedSurface, SeamRule};
     use nlrt_poly::{Vector2, Vector3};
-    let (field, tiling, rest) = map_of::<T>(data);
+    let (field, tiling, rest) = map_of::<T>(data, false);
     let x = decode::<T, SEAM_VALUES>(rest).coeffs;
     let v3 = |i: usize| T::Vec3::new(x[i], x[i + 1], x[i + 2]);
     let p = [v3(0), v3(3), v3(6), v3(9)];
