@@ -421,12 +421,16 @@ pub fn fuzz_displacement<T: Real>(data: &[u8]) {
         check_traversal_hit(&hit.hit, &hit);
     }
     surface.set_straight_walk(false);
-    let fast = surface.intersect(&ray, T::ZERO, T::INFINITY, &mut TraversalStats::default());
+    let mut walk_stats = TraversalStats::default();
+    let fast = surface.intersect(&ray, T::ZERO, T::INFINITY, &mut walk_stats);
     if let Some(hit) = fast {
         check_traversal_hit(&hit.hit, &hit);
     }
     let [x0, y0, x1, y1] = surface.roots(0).texels.map(i64::from);
+    // The brute force tests every texel in the walk's arithmetic: not comparable where the
+    // walk met a decision `f32` could not make and traced the prism in `f64`.
     if (x1 - x0 + 1) * (y1 - y0 + 1) <= BRUTE_FORCE_CELLS
+        && walk_stats.undecided_in_f32 == 0
         && let Some(f) = fast
     {
         let brute = surface.intersect_brute_force(&ray, T::ZERO, T::INFINITY);
@@ -456,18 +460,23 @@ pub fn fuzz_displacement<T: Real>(data: &[u8]) {
         assert!(h.hit.t.is_finite() && h.hit.t > T::ZERO, "curved {h:?}");
         let _ = surface.curved_normal(&h, ray.dir);
     }
-    let cone = nlrt_baselines::ConeTracing::new(
-        &surface,
-        nlrt_baselines::ConeOptions {
-            max_steps: 256,
-            ..nlrt_baselines::ConeOptions::default()
-        },
-    );
-    if let Some(h) = surface.intersect_cone_traced(&ray, T::ZERO, T::INFINITY, &cone, &mut stats) {
-        assert!(
-            h.hit.t.is_finite() && h.hit.t > T::ZERO,
-            "cone tracing {h:?}"
+    // Cone maps are built for square maps with a power-of-two side only.
+    if surface.field().square_side().is_some() {
+        let cone = nlrt_baselines::ConeTracing::new(
+            &surface,
+            nlrt_baselines::ConeOptions {
+                max_steps: 256,
+                ..nlrt_baselines::ConeOptions::default()
+            },
         );
+        if let Some(h) =
+            surface.intersect_cone_traced(&ray, T::ZERO, T::INFINITY, &cone, &mut stats)
+        {
+            assert!(
+                h.hit.t.is_finite() && h.hit.t > T::ZERO,
+                "cone tracing {h:?}"
+            );
+        }
     }
 }
 

@@ -1,5 +1,8 @@
 //! The accelerated traversal (TLAS + min-max pyramid) returns exactly the first hit that
-//! testing every microtriangle of every texel of every prism returns, for f32 and f64.
+//! testing every microtriangle of every texel of every prism returns, for f32 and f64. A ray
+//! whose `f32` walk met a decision `f32` cannot make traces that prism in `f64`
+//! (`TraversalStats::undecided_in_f32`) while testing every texel stays in `f32`: such rays
+//! are counted, not compared, and must stay rare.
 
 use nlrt_accel::{DisplacedSurface, TraversalStats, Wrap};
 use nlrt_poly::{Real, Vector3};
@@ -24,6 +27,8 @@ struct Tally {
     texel_tests: u64,
     /// Prisms traced in `f64` (an `f32` surface's ill-conditioned ones).
     f64_prisms: u64,
+    /// Rays whose walk met a decision `f32` could not make (not compared).
+    undecided: usize,
 }
 
 fn compare<T: Real>(
@@ -56,6 +61,10 @@ fn compare<T: Real>(
         tally.box_tests += u64::from(stats.box_tests);
         tally.texel_tests += u64::from(stats.texel_tests);
         tally.f64_prisms += u64::from(stats.f64_prisms);
+        if stats.undecided_in_f32 > 0 {
+            tally.undecided += 1;
+            continue;
+        }
         let agree = match (fast, brute) {
             (None, None) => true,
             (Some(a), Some(b)) => {
@@ -91,6 +100,9 @@ macro_rules! accel_tests {
                 eprintln!("{} {side} {kind:?} x{tiling} mesh {mesh_n} degenerate {degenerate}: {tally:?}", stringify!($t));
                 assert!(tally.hits > tally.rays / 4, "the rays should mostly hit: {tally:?}");
                 assert_eq!(tally.mismatches, 0, "{tally:?}");
+                // Decisions `f32` cannot make are rare (near a pole of a ray's curve, or on a
+                // uv-degenerate prism): at most 1% of the rays.
+                assert!(tally.undecided * 100 <= tally.rays, "{tally:?}");
                 tally
             }
 

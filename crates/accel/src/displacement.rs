@@ -588,7 +588,15 @@ impl<T: Real> DisplacedSurface<T> {
             },
             |x, y, _, t_max, stats| {
                 stats.texel_tests += 1;
-                let (hit, part) = self.texel_hit(prism, ray, &edges, &curve, x, y, t_min, t_max)?;
+                let (hit, part) = self.texel_hit(
+                    prism,
+                    ray,
+                    &edges,
+                    &curve,
+                    [x, y],
+                    [t_min, t_max],
+                    &mut stats.undecided_in_f32,
+                )?;
                 best = Some(SurfaceHit {
                     hit,
                     triangle: tri as u32,
@@ -632,6 +640,7 @@ impl<T: Real> DisplacedSurface<T> {
         ray: &NonlinearRay<C>,
         t_min: C,
         t_max: C,
+        stats: &mut TraversalStats,
     ) -> Option<SurfaceHit<C>> {
         let [x0, y0, x1, y1] = self.prisms.roots(tri).texels;
         let edges = BaseEdges::new(ray);
@@ -640,9 +649,15 @@ impl<T: Real> DisplacedSurface<T> {
         let mut t_max = t_max;
         for y in y0..=y1 {
             for x in x0..=x1 {
-                if let Some((hit, part)) =
-                    self.texel_hit(prism, ray, &edges, &curve, x, y, t_min, t_max)
-                {
+                if let Some((hit, part)) = self.texel_hit(
+                    prism,
+                    ray,
+                    &edges,
+                    &curve,
+                    [x, y],
+                    [t_min, t_max],
+                    &mut stats.undecided_in_f32,
+                ) {
                     t_max = hit.t;
                     best = Some(SurfaceHit {
                         hit,
@@ -805,7 +820,7 @@ impl<T: Real> PrismSearch<T> for DisplacedSurface<T> {
     ) -> Option<SurfaceHit<C>> {
         match search {
             Search::Walk => self.walk_blas::<C, CURVE_STACK>(tri, prism, ray, t_min, t_max, stats),
-            Search::EveryCell => self.brute_force_in(tri, prism, ray, t_min, t_max),
+            Search::EveryCell => self.brute_force_in(tri, prism, ray, t_min, t_max, stats),
         }
     }
 

@@ -13,6 +13,10 @@ pub struct TraversalStats {
     /// finished by box tests (slower, same answer).
     pub fallbacks: u32,
     /// Prisms of an `f32` surface traced in `f64`, where Eq. 6 is ill-conditioned for the ray
-    /// (`DisplacedSurface::intersect_blas`).
+    /// (`DisplacedSurface::intersect_blas`), or where `f32` met a decision it could not make.
     pub f64_prisms: u32,
+    /// Texel decisions an `f32` walk could not make that `f64` makes otherwise (near a pole of
+    /// the ray's curve: the signs at a split point, or a root the cubic's signs cannot vouch
+    /// for); each sends its prism to `f64`, whole.
+    pub undecided_in_f32: u32,
 }

@@ -36,12 +36,28 @@ impl<T: Real> DisplacedSurface<T> {
         t_max: T,
     ) -> Option<(Hit<T>, TexelPart)> {
         let curve = TextureCurve::new(prism, ray);
-        self.texel_hit(prism, ray, &BaseEdges::new(ray), &curve, x, y, t_min, t_max)
+        let edges = BaseEdges::new(ray);
+        // One texel alone: a decision `f32` cannot make is answered in `f32` here (the prism
+        // walks send such a prism to `f64`, whole).
+        let mut undecided = 0;
+        self.texel_hit(
+            prism,
+            ray,
+            &edges,
+            &curve,
+            [x, y],
+            [t_min, t_max],
+            &mut undecided,
+        )
     }
 
     /// [`DisplacedSurface::intersect_texel`] with the base edges and the texture curve's error
-    /// bounds computed once per prism.
-    #[allow(clippy::too_many_arguments)]
+    /// bounds computed once per prism. In `f32`, a decision `f32` cannot make and `f64` makes
+    /// otherwise (near a pole of the curve, `D(h)` a tenth of its coefficients: a split
+    /// point's two signs below their rounding bounds where `f64` finds the two planes' signs
+    /// equal, or a root its cubic's signs cannot vouch for where `f64` finds the curve clear
+    /// of the plane; a coarse torus gave an `f32` ghost hit there, `docs/watertightness.md`)
+    /// adds one to `undecided`, and the caller traces the prism again in `f64`, whole.
     #[inline(always)]
     pub(crate) fn texel_hit<C: Real>(
         &self,
@@ -49,10 +65,9 @@ impl<T: Real> DisplacedSurface<T> {
         ray: &NonlinearRay<C>,
         edges: &BaseEdges<C>,
         curve: &TextureCurve<'_, C>,
-        x: i32,
-        y: i32,
-        t_min: C,
-        t_max: C,
+        [x, y]: [i32; 2],
+        [t_min, t_max]: [C; 2],
+        undecided: &mut u32,
     ) -> Option<(Hit<C>, TexelPart)> {
         let (uv, heights) = self.texel_geometry_in::<C>(x, y);
         let ([u0, v0, u1, v1], [h00, h10, h01, h11]) = (uv, heights);
@@ -268,12 +283,17 @@ impl<T: Real> DisplacedSurface<T> {
             if let Some(((own_cubic, own_abh, own_part, own_plane), Some((other, other_cubic)))) =
                 pair
             {
-                let certain_same = match decided_sign(own_cubic, a) {
-                    Some(own) => decided_sign(&other_cubic, a) == Some(own),
-                    None => false,
-                };
-                // Where `C` cannot decide, `f64` may (`f32` near a pole of the curve).
-                if !certain_same && !planes_agree_in_f64(prism, &ray.ray, [own_plane, &other], a) {
+                let (own_sign, other_sign) =
+                    (decided_sign(own_cubic, a), decided_sign(&other_cubic, a));
+                if !(own_sign.is_some() && own_sign == other_sign) {
+                    // Neither sign decided in `C` where `f64` finds them equal (`f32` near a
+                    // pole of the curve): the prism goes to `f64`.
+                    if own_sign.is_none()
+                        && other_sign.is_none()
+                        && planes_agree_in_f64(prism, &ray.ray, [own_plane, &other], a)
+                    {
+                        *undecided += 1;
+                    }
                     consider(a, own_abh, own_part, &mut t_max);
                 }
             }
@@ -333,13 +353,13 @@ impl<T: Real> DisplacedSurface<T> {
                         continue;
                     }
                     // A root `C` cannot vouch for (its cubic's sign undecided at an end of the
-                    // search, or the same at both) is dropped where `f64` finds the curve
-                    // clear of the plane over the whole search (`f32` near a pole of the
-                    // curve: a root at the split point beside the ghost above).
+                    // search, or the same at both) where `f64` finds the curve clear of the
+                    // plane over the whole search (`f32` near a pole of the curve: a root at
+                    // the split point beside the ghost above): the prism goes to `f64`.
                     let (sign_lo, sign_hi) = (decided_sign(cubic, lo), decided_sign(cubic, hi));
                     let vouched = sign_lo.is_some() && sign_hi.is_some() && sign_lo != sign_hi;
                     if !vouched && piece_clear_in_f64(prism, &ray.ray, plane, [lo, hi]) {
-                        continue;
+                        *undecided += 1;
                     }
                     consider(r.max(a).min(b), abh, part, &mut t_max);
                 }

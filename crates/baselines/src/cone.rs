@@ -428,6 +428,10 @@ pub struct ConeTracing<T: Real> {
 impl<T: Real> ConeTracing<T> {
     /// Builds the cone map and the quadrics of `surface` (one thread; see
     /// [`ConeMap::builder`] to fill the map's rows in parallel).
+    ///
+    /// # Panics
+    /// On a map that is not square with a power-of-two side
+    /// (`HeightField::square_side`).
     #[must_use]
     pub fn new(surface: &DisplacedSurface<T>, options: ConeOptions) -> Self {
         Self {

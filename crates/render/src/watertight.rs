@@ -1449,12 +1449,12 @@ mod tests {
     }
 
     /// A ray of the paper-size fur (`nlrt watertight fur --scene-size paper --rays 65536`,
-    /// grid cell (37, 51)) that passes beside a hair: the exact ray meets no microtriangle
+    /// grid cell (118, 105)) that passes beside a hair: the exact ray meets no microtriangle
     /// near it, and the `f32` tracer reports a hit on the hair's wall, where conservative
-    /// rounding counts the near miss as a hit. The reported point lies 1.9e-4 units of height
-    /// above the surface at its texture coordinates (beyond the tolerance: a wall that rises
-    /// a unit within a texel or two) but 2.1e-7 of the distance from the wall: grazing, not a
-    /// ghost.
+    /// rounding counts the near miss as a hit. The reported point lies 1.1e-2 units of height
+    /// above the surface at its texture coordinates (far beyond the tolerance: a wall that
+    /// rises a unit within a texel or two) but 4.6e-6 of the distance from the wall, within a
+    /// tenth of the tolerance: grazing, not a ghost.
     #[test]
     fn a_near_miss_beside_a_hair_is_grazing() {
         let scene = builtin("fur", Size::Paper).expect("built-in");
@@ -1463,7 +1463,7 @@ mod tests {
         };
         let truth = TrueSurface::new(&surface);
         let n = 256;
-        let ray = grid_ray::<f32>(&scene, n, 51 * n + 37).expect("a camera ray");
+        let ray = grid_ray::<f32>(&scene, n, 105 * n + 118).expect("a camera ray");
         let hit = surface
             .intersect(&ray, 0.0, f32::INFINITY, &mut TraversalStats::default())
             .expect("the f32 tracer reports a hit");
@@ -1489,7 +1489,7 @@ mod tests {
         );
         let t = f64::from(hit.hit.t);
         let distance = distance_to_surface(&prism, surface.field(), a, b, h);
-        assert!(distance < 2e-6 * t, "{distance}");
+        assert!(distance < 0.1 * LEAK_TOLERANCE * t, "{distance}");
         assert_eq!(truth.judge(&ray, &hit), HitJudgement::Grazing, "{hit:?}");
     }
 
