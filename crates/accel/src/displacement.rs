@@ -591,8 +591,7 @@ impl<T: Real> DisplacedSurface<T> {
                 let (hit, part) = self.texel_hit(
                     prism,
                     ray,
-                    &edges,
-                    &curve,
+                    (&edges, &curve),
                     [x, y],
                     [t_min, t_max],
                     &mut stats.undecided_in_f32,
@@ -652,8 +651,7 @@ impl<T: Real> DisplacedSurface<T> {
                 if let Some((hit, part)) = self.texel_hit(
                     prism,
                     ray,
-                    &edges,
-                    &curve,
+                    (&edges, &curve),
                     [x, y],
                     [t_min, t_max],
                     &mut stats.undecided_in_f32,
