@@ -21,8 +21,7 @@ pub struct EmbreeTessellated {
     device: sys::RTCDevice,
     scene: sys::RTCScene,
     base: Vec<u32>,
-    /// Bytes Embree allocated (boxed: the callback holds its address).
-    allocated: Box<AtomicIsize>,
+    allocated: MemoryCounter,
 }
 
 // SAFETY: a committed Embree scene is immutable and Embree documents `rtcIntersect1` on it as
@@ -36,6 +35,17 @@ unsafe extern "C" fn count_bytes(ptr: *mut std::ffi::c_void, bytes: isize, _post
     let counter = unsafe { &*(ptr as *const AtomicIsize) };
     counter.fetch_add(bytes, Ordering::Relaxed);
     true
+}
+
+/// Bytes an Embree device allocated, counted by its memory-monitor callback (boxed: the
+/// callback holds its address).
+pub(crate) struct MemoryCounter(Box<AtomicIsize>);
+
+impl MemoryCounter {
+    /// Bytes allocated and not freed.
+    pub(crate) fn bytes(&self) -> usize {
+        self.0.load(Ordering::Relaxed).max(0) as usize
+    }
 }
 
 /// Which kernels Embree may use.
@@ -60,62 +70,89 @@ impl Isa {
     }
 }
 
+/// An Embree device with kernels `isa` and its memory counter; `None` when Embree cannot
+/// create one (no supported CPU, or the library refuses).
+pub(crate) fn new_device(isa: Isa) -> Option<(sys::RTCDevice, MemoryCounter)> {
+    let allocated = MemoryCounter(Box::new(AtomicIsize::new(0)));
+    // SAFETY: plain calls of Embree's C API; the counter's address stays valid as long as the
+    // device (the caller keeps both and releases the device first).
+    unsafe {
+        let config = isa
+            .config()
+            .map_or(std::ptr::null(), |c| c.as_ptr().cast::<std::ffi::c_char>());
+        let device = sys::rtcNewDevice(config);
+        if device.is_null() {
+            return None;
+        }
+        sys::rtcSetDeviceMemoryMonitorFunction(
+            device,
+            Some(count_bytes),
+            &*allocated.0 as *const AtomicIsize as *mut std::ffi::c_void,
+        );
+        Some((device, allocated))
+    }
+}
+
+/// A committed Embree triangle geometry of `triangles` (f32, three vertices each), or `None`
+/// when Embree cannot allocate its buffers.
+///
+/// # Safety
+/// `device` is a live Embree device.
+pub(crate) unsafe fn triangle_geometry(
+    device: sys::RTCDevice,
+    triangles: &[[DVec3; 3]],
+) -> Option<sys::RTCGeometry> {
+    // SAFETY: the buffers are written within the sizes requested from Embree.
+    unsafe {
+        let geometry = sys::rtcNewGeometry(device, sys::RTCGeometryType::TRIANGLE);
+        let count = triangles.len();
+        let vertices = sys::rtcSetNewGeometryBuffer(
+            geometry,
+            sys::RTCBufferType::VERTEX,
+            0,
+            sys::RTCFormat::FLOAT3,
+            3 * std::mem::size_of::<f32>(),
+            3 * count,
+        ) as *mut f32;
+        let indices = sys::rtcSetNewGeometryBuffer(
+            geometry,
+            sys::RTCBufferType::INDEX,
+            0,
+            sys::RTCFormat::UINT3,
+            3 * std::mem::size_of::<u32>(),
+            count,
+        ) as *mut u32;
+        if vertices.is_null() || indices.is_null() {
+            sys::rtcReleaseGeometry(geometry);
+            return None;
+        }
+        for (k, tri) in triangles.iter().enumerate() {
+            for (c, p) in tri.iter().enumerate() {
+                let v = vertices.add(3 * (3 * k + c));
+                *v = p.x as f32;
+                *v.add(1) = p.y as f32;
+                *v.add(2) = p.z as f32;
+                *indices.add(3 * k + c) = (3 * k + c) as u32;
+            }
+        }
+        sys::rtcCommitGeometry(geometry);
+        Some(geometry)
+    }
+}
+
 impl EmbreeTessellated {
     /// Tessellates `scene` and builds the Embree scene with kernels `isa`; `None` when Embree
     /// cannot create a device (no supported CPU, or the library refuses).
     #[must_use]
     pub fn new(scene: &Scene, isa: Isa) -> Option<Self> {
         let tessellated = Tessellated::new(scene);
-        let triangles = tessellated.triangles();
-        let allocated = Box::new(AtomicIsize::new(0));
-        // SAFETY: plain calls of Embree's C API on handles created here and checked for null;
-        // the buffers are written within the sizes requested from Embree.
+        let (device, allocated) = new_device(isa)?;
+        // SAFETY: plain calls of Embree's C API on handles created here and checked for null.
         unsafe {
-            let config = isa
-                .config()
-                .map_or(std::ptr::null(), |c| c.as_ptr().cast::<std::ffi::c_char>());
-            let device = sys::rtcNewDevice(config);
-            if device.is_null() {
-                return None;
-            }
-            sys::rtcSetDeviceMemoryMonitorFunction(
-                device,
-                Some(count_bytes),
-                &*allocated as *const AtomicIsize as *mut std::ffi::c_void,
-            );
-            let geometry = sys::rtcNewGeometry(device, sys::RTCGeometryType::TRIANGLE);
-            let count = triangles.len();
-            let vertices = sys::rtcSetNewGeometryBuffer(
-                geometry,
-                sys::RTCBufferType::VERTEX,
-                0,
-                sys::RTCFormat::FLOAT3,
-                3 * std::mem::size_of::<f32>(),
-                3 * count,
-            ) as *mut f32;
-            let indices = sys::rtcSetNewGeometryBuffer(
-                geometry,
-                sys::RTCBufferType::INDEX,
-                0,
-                sys::RTCFormat::UINT3,
-                3 * std::mem::size_of::<u32>(),
-                count,
-            ) as *mut u32;
-            if vertices.is_null() || indices.is_null() {
-                sys::rtcReleaseGeometry(geometry);
+            let Some(geometry) = triangle_geometry(device, tessellated.triangles()) else {
                 sys::rtcReleaseDevice(device);
                 return None;
-            }
-            for (k, tri) in triangles.iter().enumerate() {
-                for (c, p) in tri.iter().enumerate() {
-                    let v = vertices.add(3 * (3 * k + c));
-                    *v = p.x as f32;
-                    *v.add(1) = p.y as f32;
-                    *v.add(2) = p.z as f32;
-                    *indices.add(3 * k + c) = (3 * k + c) as u32;
-                }
-            }
-            sys::rtcCommitGeometry(geometry);
+            };
             let handle = sys::rtcNewScene(device);
             sys::rtcAttachGeometry(handle, geometry);
             sys::rtcReleaseGeometry(geometry);
@@ -130,60 +167,149 @@ impl EmbreeTessellated {
     }
 }
 
+/// One hit of [`intersect1`].
+pub(crate) struct EmbreeHit {
+    pub(crate) t: f64,
+    /// Unit geometric normal facing the ray.
+    pub(crate) normal: DVec3,
+    pub(crate) prim_id: u32,
+    pub(crate) geom_id: u32,
+}
+
+/// The nearest hit of one ray in a committed Embree `scene` (`rtcIntersect1`, incoherent).
+pub(crate) fn intersect1(
+    scene: sys::RTCScene,
+    origin: DVec3,
+    dir: DVec3,
+    t_min: f64,
+    t_max: f64,
+) -> Option<EmbreeHit> {
+    let mut rayhit = sys::RTCRayHit {
+        ray: sys::RTCRay {
+            org_x: origin.x as f32,
+            org_y: origin.y as f32,
+            org_z: origin.z as f32,
+            tnear: t_min as f32,
+            dir_x: dir.x as f32,
+            dir_y: dir.y as f32,
+            dir_z: dir.z as f32,
+            time: 0.0,
+            tfar: if t_max.is_finite() {
+                t_max as f32
+            } else {
+                f32::INFINITY
+            },
+            mask: u32::MAX,
+            id: 0,
+            flags: 0,
+        },
+        hit: sys::RTCHit {
+            Ng_x: 0.0,
+            Ng_y: 0.0,
+            Ng_z: 0.0,
+            u: 0.0,
+            v: 0.0,
+            primID: u32::MAX,
+            geomID: u32::MAX,
+            instID: [u32::MAX],
+        },
+    };
+    let mut context = embree::IntersectContext::incoherent();
+    // SAFETY: the scene is committed and alive; the structures are Embree's own layout.
+    unsafe { sys::rtcIntersect1(scene, &mut context, &mut rayhit) };
+    if rayhit.hit.geomID == u32::MAX {
+        return None;
+    }
+    let h = &rayhit.hit;
+    let n = DVec3::new(f64::from(h.Ng_x), f64::from(h.Ng_y), f64::from(h.Ng_z));
+    let n = n.try_normalize()?;
+    Some(EmbreeHit {
+        t: f64::from(rayhit.ray.tfar),
+        normal: if n.dot(dir) > 0.0 { -n } else { n },
+        prim_id: h.primID,
+        geom_id: h.geomID,
+    })
+}
+
 impl Tracer for EmbreeTessellated {
     fn intersect(&self, origin: DVec3, dir: DVec3, t_min: f64, t_max: f64) -> Option<TraceHit> {
-        let mut rayhit = sys::RTCRayHit {
-            ray: sys::RTCRay {
-                org_x: origin.x as f32,
-                org_y: origin.y as f32,
-                org_z: origin.z as f32,
-                tnear: t_min as f32,
-                dir_x: dir.x as f32,
-                dir_y: dir.y as f32,
-                dir_z: dir.z as f32,
-                time: 0.0,
-                tfar: if t_max.is_finite() {
-                    t_max as f32
-                } else {
-                    f32::INFINITY
-                },
-                mask: u32::MAX,
-                id: 0,
-                flags: 0,
-            },
-            hit: sys::RTCHit {
-                Ng_x: 0.0,
-                Ng_y: 0.0,
-                Ng_z: 0.0,
-                u: 0.0,
-                v: 0.0,
-                primID: u32::MAX,
-                geomID: u32::MAX,
-                instID: [u32::MAX],
-            },
-        };
-        let mut context = embree::IntersectContext::incoherent();
-        // SAFETY: the scene is committed and alive; the structures are Embree's own layout.
-        unsafe { sys::rtcIntersect1(self.scene, &mut context, &mut rayhit) };
-        if rayhit.hit.geomID == u32::MAX {
-            return None;
-        }
-        let h = &rayhit.hit;
-        let n = DVec3::new(f64::from(h.Ng_x), f64::from(h.Ng_y), f64::from(h.Ng_z));
-        let n = n.try_normalize()?;
+        let hit = intersect1(self.scene, origin, dir, t_min, t_max)?;
         Some(TraceHit {
-            t: f64::from(rayhit.ray.tfar),
-            normal: if n.dot(dir) > 0.0 { -n } else { n },
-            id: self.base[h.primID as usize],
+            t: hit.t,
+            normal: hit.normal,
+            id: self.base[hit.prim_id as usize],
         })
     }
 
     fn memory_bytes(&self) -> usize {
-        self.allocated.load(Ordering::Relaxed).max(0) as usize
+        self.allocated.bytes()
     }
 }
 
 impl Drop for EmbreeTessellated {
+    fn drop(&mut self) {
+        // SAFETY: the handles were created in `new` and are released once, scene first.
+        unsafe {
+            sys::rtcReleaseScene(self.scene);
+            sys::rtcReleaseDevice(self.device);
+        }
+    }
+}
+
+/// A plain Embree scene of world triangles (kernels `isa`): hits carry the triangle's index
+/// as [`TraceHit::id`]. The pre-tessellated side of a comparison with
+/// [`crate::embree_user::EmbreeWithSurface`].
+pub struct EmbreeTriangles {
+    device: sys::RTCDevice,
+    scene: sys::RTCScene,
+    allocated: MemoryCounter,
+}
+
+// SAFETY: as for `EmbreeTessellated`.
+unsafe impl Send for EmbreeTriangles {}
+// SAFETY: as above.
+unsafe impl Sync for EmbreeTriangles {}
+
+impl EmbreeTriangles {
+    /// The scene of `triangles`; `None` when Embree cannot create a device or a buffer.
+    #[must_use]
+    pub fn new(triangles: &[[DVec3; 3]], isa: Isa) -> Option<Self> {
+        let (device, allocated) = new_device(isa)?;
+        // SAFETY: plain calls of Embree's C API on handles created here and checked for null.
+        unsafe {
+            let Some(geometry) = triangle_geometry(device, triangles) else {
+                sys::rtcReleaseDevice(device);
+                return None;
+            };
+            let scene = sys::rtcNewScene(device);
+            sys::rtcAttachGeometry(scene, geometry);
+            sys::rtcReleaseGeometry(geometry);
+            sys::rtcCommitScene(scene);
+            Some(Self {
+                device,
+                scene,
+                allocated,
+            })
+        }
+    }
+}
+
+impl Tracer for EmbreeTriangles {
+    fn intersect(&self, origin: DVec3, dir: DVec3, t_min: f64, t_max: f64) -> Option<TraceHit> {
+        let hit = intersect1(self.scene, origin, dir, t_min, t_max)?;
+        Some(TraceHit {
+            t: hit.t,
+            normal: hit.normal,
+            id: hit.prim_id,
+        })
+    }
+
+    fn memory_bytes(&self) -> usize {
+        self.allocated.bytes()
+    }
+}
+
+impl Drop for EmbreeTriangles {
     fn drop(&mut self) {
         // SAFETY: the handles were created in `new` and are released once, scene first.
         unsafe {

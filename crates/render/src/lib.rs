@@ -31,6 +31,8 @@ pub mod bench_json;
 pub mod edit;
 #[cfg(feature = "embree")]
 pub mod embree_reference;
+#[cfg(feature = "embree")]
+pub mod embree_user;
 pub mod image;
 pub mod integrator;
 pub mod material;
