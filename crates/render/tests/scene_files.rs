@@ -243,21 +243,7 @@ fn write_exr_heights(path: &Path, png_path: &Path, name: &str, edit: impl Fn(&mu
 fn exr_height_maps_render_like_the_png_they_were_made_from() {
     let dir = scratch("exr");
     write_exr_heights(&dir.join("bumps.exr"), &dir.join("bumps.png"), "Y", |_| {});
-    let render_to = |name: &str| {
-        let out = dir.join(name);
-        let o = nlrt(&[
-            "render",
-            dir.join("bumps.toml").to_str().unwrap(),
-            "--size",
-            "48x36",
-            "--precision",
-            "f64",
-            "-o",
-            out.to_str().unwrap(),
-        ]);
-        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-        std::fs::read(out).unwrap()
-    };
+    let render_to = |name: &str| render_bytes(&dir, name);
     let from_png = render_to("png.png");
     edit(&dir, "bumps.toml", "\"bumps.png\"", "\"bumps.exr\"");
     // Heights s / 65535 in f32 round back to s exactly: the same samples, the same image.
@@ -413,6 +399,24 @@ fn render_with(dir: &Path, extra: &[&str]) -> (Option<i32>, String) {
         out.status.code(),
         String::from_utf8_lossy(&out.stderr).into_owned(),
     )
+}
+
+/// Renders the scene file in `dir` at 48 x 36 in f64 to `dir/name`, expecting success; the
+/// PNG's bytes.
+fn render_bytes(dir: &Path, name: &str) -> Vec<u8> {
+    let out = dir.join(name);
+    let o = nlrt(&[
+        "render",
+        dir.join("bumps.toml").to_str().unwrap(),
+        "--size",
+        "48x36",
+        "--precision",
+        "f64",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    std::fs::read(out).unwrap()
 }
 
 /// Texture coordinates the tracers cannot use (NaN; beyond 2^22 texels once tiled and scaled
@@ -717,21 +721,7 @@ fn tiff_height_maps_render_like_the_png_and_dems_normalise() {
     let dir = scratch("tiff");
     let (samples, w, h) = png_samples(&dir.join("bumps.png"));
     write_tiff::<Gray16>(&dir.join("bumps.tif"), w, h, &samples);
-    let render_to = |name: &str| {
-        let out = dir.join(name);
-        let o = nlrt(&[
-            "render",
-            dir.join("bumps.toml").to_str().unwrap(),
-            "--size",
-            "48x36",
-            "--precision",
-            "f64",
-            "-o",
-            out.to_str().unwrap(),
-        ]);
-        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-        std::fs::read(out).unwrap()
-    };
+    let render_to = |name: &str| render_bytes(&dir, name);
     let from_png = render_to("png.png");
     edit(&dir, "bumps.toml", "\"bumps.png\"", "\"bumps.tif\"");
     assert_eq!(render_to("tif.png"), from_png);
