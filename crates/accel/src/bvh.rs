@@ -821,11 +821,8 @@ mod tests {
         for max_leaf in [1, 4] {
             let bvh = Bvh4::build(&bs, max_leaf);
             assert_eq!(bvh.primitive_count(), bs.len());
-            let mut s = 99u64;
-            let mut r = move || {
-                s = s.wrapping_mul(6364136223846793005).wrapping_add(1);
-                (s >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-            };
+            let mut unit = crate::test_util::unit_randoms(99);
+            let mut r = move || unit() - 0.5;
             for _ in 0..500 {
                 let o = DVec3::new(r(), r(), r()) * 30.0 + DVec3::splat(5.0);
                 let d = DVec3::new(r(), r(), r()).normalize();
@@ -892,11 +889,8 @@ mod tests {
         assert_boxes_hold_their_children(&refitted, &moved);
         let fresh = Bvh4::build(&moved, 1);
         assert!(refitted.sah_cost() >= fresh.sah_cost() * 0.9);
-        let mut s = 7u64;
-        let mut r = move || {
-            s = s.wrapping_mul(6364136223846793005).wrapping_add(1);
-            (s >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        };
+        let mut unit = crate::test_util::unit_randoms(7);
+        let mut r = move || unit() - 0.5;
         for _ in 0..300 {
             let o = DVec3::new(r(), r(), r()) * 30.0 + DVec3::splat(5.0);
             let ray = SlabRay::new(o, DVec3::new(r(), r(), r()).normalize());

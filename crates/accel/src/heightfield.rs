@@ -616,16 +616,10 @@ mod tests {
     use super::*;
     use alloc::vec;
 
+    /// `count` samples spread over the whole 16-bit range.
     fn pseudo_random(count: usize, seed: u64) -> Vec<u16> {
-        let mut s = seed;
-        (0..count)
-            .map(|_| {
-                s = s
-                    .wrapping_mul(6364136223846793005)
-                    .wrapping_add(1442695040888963407);
-                (s >> 48) as u16
-            })
-            .collect()
+        let mut unit = crate::test_util::unit_randoms(seed);
+        (0..count).map(|_| (unit() * 65536.0) as u16).collect()
     }
 
     /// Bounds over every corner sample of node `(x, y)` of `level`, read one by one.
