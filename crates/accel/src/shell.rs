@@ -312,6 +312,9 @@ impl<T: Real> ShellSurface<T> {
     /// Nearest hit on object triangle `k` placed in tile `(x, y)`, computed in `C` (the
     /// triangle placed in `T`, as [`Self::placed_triangle`] gives it to an oracle, and
     /// widened exactly).
+    /// The object triangle hit is returned with the hit: `k`, or a neighbour across a shared
+    /// edge of `k` at one of `heights` (where the walk found the curve in the tile;
+    /// [`crate::object_edges`]).
     #[inline]
     #[allow(clippy::too_many_arguments)]
     fn intersect_object_triangle<C: Real>(
@@ -322,14 +325,23 @@ impl<T: Real> ShellSurface<T> {
         [x, y]: [i32; 2],
         t_min: C,
         t_max: C,
-    ) -> Option<Hit<C>> {
+        heights: [C; 2],
+    ) -> Option<(Hit<C>, u32)> {
         let tri = widened::<T, C>(&Self::shifted(&self.object.triangles[k as usize], x, y));
-        self.object
-            .edges
-            .intersect(k, [x, y], &tri, prism, ray, t_min, t_max, |other| {
+        self.object.edges.intersect(
+            k,
+            [x, y],
+            &tri,
+            prism,
+            ray,
+            t_min,
+            t_max,
+            heights,
+            |other| {
                 self.placed_triangle(other, [x, y])
                     .map(|t| widened::<T, C>(&t))
-            })
+            },
+        )
     }
 
     /// The object's BVH in tile `(x, y)` along `curve` (set up once per prism), nearest
@@ -408,15 +420,21 @@ impl<T: Real> ShellSurface<T> {
                     let first = node.index[c] as usize;
                     for &k in &order[first..first + node.count[c] as usize] {
                         stats.texel_tests += 1;
-                        if let Some(hit) =
-                            self.intersect_object_triangle(prism, ray, k, [x, y], t_min, *t_max)
-                        {
+                        if let Some((hit, object_triangle)) = self.intersect_object_triangle(
+                            prism,
+                            ray,
+                            k,
+                            [x, y],
+                            t_min,
+                            *t_max,
+                            [h_in, h_out],
+                        ) {
                             *t_max = hit.t;
                             *best = Some(ShellHit {
                                 hit,
                                 triangle: tri as u32,
                                 tile: [x, y],
-                                object_triangle: k,
+                                object_triangle,
                             });
                         }
                     }
@@ -598,15 +616,21 @@ impl<T: Real> PrismSearch<T> for ShellSurface<T> {
                 for y in y0..=y1 {
                     for x in x0..=x1 {
                         for k in 0..self.object.triangles.len() as u32 {
-                            if let Some(hit) =
-                                self.intersect_object_triangle(prism, ray, k, [x, y], t_min, t_max)
-                            {
+                            if let Some((hit, object_triangle)) = self.intersect_object_triangle(
+                                prism,
+                                ray,
+                                k,
+                                [x, y],
+                                t_min,
+                                t_max,
+                                [C::NEG_INFINITY, C::INFINITY],
+                            ) {
                                 t_max = hit.t;
                                 best = Some(ShellHit {
                                     hit,
                                     triangle: tri as u32,
                                     tile: [x, y],
-                                    object_triangle: k,
+                                    object_triangle,
                                 });
                             }
                         }

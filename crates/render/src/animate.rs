@@ -12,6 +12,7 @@
 use crate::image::write_png;
 use crate::integrator::{self, Frame, RenderOptions};
 use crate::method::Method;
+use crate::objects::ObjectUnion;
 use crate::scenes::Scene;
 use crate::tracer::Tracer;
 use crate::tracers::Nonlinear;
@@ -173,18 +174,10 @@ pub fn run(scene: &Scene, opts: &AnimateOptions) -> Result<AnimateReport, String
     Ok(AnimateReport {
         scene: scene.name.to_string(),
         motion: scene.motion.describe(),
-        prisms: scene.triangles.len(),
+        prisms: scene.triangle_count(),
         options: opts.clone(),
         rows,
     })
-}
-
-/// The posed scene of frame `k`.
-fn posed(scene: &Scene, k: usize, frames: usize) -> Result<Scene, String> {
-    let pose = scene
-        .pose(k, frames)
-        .ok_or_else(|| format!("scene '{}' has no motion", scene.name))?;
-    scene.posed(&pose)
 }
 
 fn write_frame(
@@ -222,7 +215,25 @@ fn progress(row: &FrameRow, frames: usize) {
     );
 }
 
-/// Nonlinear tracing in `T`: built once on the rest pose, then one pose update per frame.
+/// An object's pose in `T`: positions and normals.
+type PoseIn<T> = (Vec<<T as Real>::Vec3>, Vec<<T as Real>::Vec3>);
+
+/// Nonlinear tracing of every object in `T`, traced as one.
+fn nonlinear_objects<T: Real>(scene: &Scene) -> ObjectUnion<Nonlinear<T>> {
+    ObjectUnion::new(
+        scene
+            .objects()
+            .map(|object| (Nonlinear::<T>::new(object), object.triangles.len())),
+    )
+}
+
+/// The sum of the objects' TLAS SAH costs.
+fn sah_cost<T: Real>(objects: &ObjectUnion<Nonlinear<T>>) -> f64 {
+    objects.tracers().map(Nonlinear::tlas_sah_cost).sum()
+}
+
+/// Nonlinear tracing in `T`: built once on the rest pose, then one pose update per frame
+/// (of every object's TLAS, for a scene of several objects).
 fn animate_nonlinear<T: Real>(
     scene: &Scene,
     method: Method,
@@ -231,24 +242,37 @@ fn animate_nonlinear<T: Real>(
 ) -> Result<(), String> {
     use nlrt_poly::Vector3;
     scene.check_precision::<T>()?;
-    let mut tracer = Nonlinear::<T>::new(scene);
+    let mut tracer = nonlinear_objects::<T>(scene);
     let v = |p: &nlrt_poly::glam::DVec3| {
         T::Vec3::new(T::from_f64(p.x), T::from_f64(p.y), T::from_f64(p.z))
     };
     for k in 0..opts.frames {
-        let posed_scene = posed(scene, k, opts.frames)?;
+        let posed_scene = scene.posed_at(k, opts.frames)?;
         // The conversion to `T` is the caller's (an animation system hands over its own
         // arrays); the update timed is the surface's.
-        let positions: Vec<T::Vec3> = posed_scene.positions.iter().map(v).collect();
-        let normals: Vec<T::Vec3> = posed_scene.normals.iter().map(v).collect();
+        let poses: Vec<PoseIn<T>> = posed_scene
+            .objects()
+            .map(|o| {
+                (
+                    o.positions.iter().map(v).collect(),
+                    o.normals.iter().map(v).collect(),
+                )
+            })
+            .collect();
         let start = Instant::now();
-        let done = tracer.set_pose_in_precision(&positions, &normals, opts.update)?;
+        let mut rebuilt = false;
+        let mut updated_cost = 0.0;
+        for (object, (positions, normals)) in tracer.tracers_mut().zip(&poses) {
+            let done = object.set_pose_in_precision(positions, normals, opts.update)?;
+            rebuilt |= done.rebuilt;
+            updated_cost += done.sah_cost;
+        }
         let update_seconds = start.elapsed().as_secs_f64();
         let render = |t: &dyn Tracer| integrator::render(&posed_scene, t, &opts.render, &|_| {});
-        let fresh_build = || -> Result<(Nonlinear<T>, f64), String> {
+        let fresh_build = || -> Result<(ObjectUnion<Nonlinear<T>>, f64), String> {
             posed_scene.check_precision::<T>()?;
             let start = Instant::now();
-            let fresh = Nonlinear::<T>::new(&posed_scene);
+            let fresh = nonlinear_objects::<T>(&posed_scene);
             Ok((fresh, start.elapsed().as_secs_f64()))
         };
         // Interleaved: the frame's two renders alternate which goes first, so neither
@@ -265,7 +289,7 @@ fn animate_nonlinear<T: Real>(
             let check = FreshBuild {
                 build_seconds,
                 render_seconds: fresh_frame.seconds,
-                sah_ratio: done.sah_cost / fresh.tlas_sah_cost(),
+                sah_ratio: updated_cost / sah_cost(&fresh),
                 mismatches: depth_mismatches(&frame, &fresh_frame),
             };
             (frame, Some(check))
@@ -276,7 +300,7 @@ fn animate_nonlinear<T: Real>(
         let row = FrameRow {
             frame: k,
             method,
-            update: if done.rebuilt { "rebuild" } else { "refit" },
+            update: if rebuilt { "rebuild" } else { "refit" },
             update_seconds,
             render_seconds: frame.seconds,
             rays: frame.all_rays,
@@ -299,7 +323,7 @@ fn animate_rebuilt(
         scene.check_precision::<f32>()?;
     }
     for k in 0..opts.frames.min(opts.rebuild_frames) {
-        let posed_scene = posed(scene, k, opts.frames)?;
+        let posed_scene = scene.posed_at(k, opts.frames)?;
         let start = Instant::now();
         let tracer = method
             .build(&posed_scene)

@@ -169,6 +169,7 @@ fn render_with(
                             break;
                         };
                         let n = hit.normal;
+                        let material = scene.material_of(hit.id);
                         if s == 0 && bounce == 0 {
                             depth = hit.t;
                             aov = ([n.x as f32, n.y as f32, n.z as f32], hit.id);
@@ -181,14 +182,14 @@ fn render_with(
                         if cos > 0.0 {
                             n_all += 1;
                             if trace(p, scene.sun, RayKind::Shadow).is_none() {
-                                let brdf_pi = scene.material.brdf_times_pi(n, dir, scene.sun);
+                                let brdf_pi = material.brdf_times_pi(n, dir, scene.sun);
                                 sum += throughput * sun_radiance * (brdf_pi * cos);
                             }
                         }
                         if bounce == opts.bounces {
                             break;
                         }
-                        let Some((next, weight)) = scene.material.sample(n, dir, &mut rng) else {
+                        let Some((next, weight)) = material.sample(n, dir, &mut rng) else {
                             break;
                         };
                         throughput *= weight;

@@ -37,6 +37,7 @@ pub mod image;
 pub mod integrator;
 pub mod material;
 pub mod method;
+pub mod objects;
 pub mod plot;
 pub mod ray_stream;
 pub mod report;

@@ -243,6 +243,11 @@ enum Command {
         /// Random cubics per precision for the solver table.
         #[arg(long, default_value_t = REPORT_SOLVER_SAMPLES)]
         solver_samples: usize,
+        /// The scenes of the speed-and-error table (comma-separated built-in names or scene
+        /// files `*.toml`; default: every built-in one but the variants). The watertightness
+        /// section judges the built-in judged scenes whatever this says.
+        #[arg(long, value_delimiter = ',')]
+        scenes: Vec<String>,
     },
     /// Leaks, decided by exact arithmetic: rays that reach a base triangle from outside (so
     /// must have hit the displaced surface) but were not hit, or, on shell scenes, rays aimed
@@ -335,9 +340,10 @@ enum Command {
         #[arg(short, long, default_value = "nlrt-animate")]
         output: PathBuf,
     },
-    /// Write a built-in scene as a scene file (TOML + OBJ + 16-bit PNG or object OBJ).
+    /// Write a built-in scene (or a scene file, rewritten with its objects placed) as a scene
+    /// file (TOML + OBJ + 16-bit PNG or object OBJ, per object).
     Export {
-        #[arg(help = format!("Built-in scene: {}", builtin_list()))]
+        #[arg(help = scene_help("A built-in scene"))]
         scene: String,
         /// Map sizes.
         #[arg(long, value_enum, default_value = "small")]
@@ -371,7 +377,7 @@ fn fail(command: &str, message: impl std::fmt::Display) -> ExitCode {
 
 fn check_scenes(names: &[String]) -> Result<(), String> {
     for n in names {
-        if !scenes::is_builtin(n) {
+        if !(scenes::is_builtin(n) || n.ends_with(".toml")) {
             return Err(format!(
                 "unknown scene '{n}' (built-in scenes: {}; variants: {})",
                 SCENE_NAMES.join(", "),
@@ -424,13 +430,8 @@ fn resolve_scene(
     size: Size,
     seam_rule: nlrt_accel::SeamRule,
 ) -> Result<scenes::Scene, String> {
-    let mut scene = if name.ends_with(".toml") {
-        nlrt_render::scene_file::load(std::path::Path::new(name))?
-    } else {
-        check_scenes(&[name.to_string()])?;
-        scenes::builtin(name, size).ok_or_else(|| format!("unknown scene '{name}'"))?
-    };
-    scene.seam_rule = seam_rule;
+    let mut scene = nlrt_render::scene_file::builtin_or_file(name, size)?;
+    scene.set_seam_rule(seam_rule);
     Ok(scene)
 }
 
@@ -463,13 +464,21 @@ fn report_command(
     output: PathBuf,
     args: &RenderArgs,
     solver_samples: usize,
+    scenes: Vec<String>,
     seam_rule: nlrt_accel::SeamRule,
 ) -> ExitCode {
+    if let Err(e) = check_scenes(&scenes) {
+        return fail("report", e);
+    }
     if let Err(e) = std::fs::create_dir_all(&output) {
         return fail("report", format!("cannot create {}: {e}", output.display()));
     }
     let opts = ReportOptions {
-        scenes: SCENE_NAMES.iter().map(|s| s.to_string()).collect(),
+        scenes: if scenes.is_empty() {
+            SCENE_NAMES.iter().map(|s| s.to_string()).collect()
+        } else {
+            scenes
+        },
         size: args.scene_size(),
         render: args.options(),
         methods: Method::ALL.to_vec(),
@@ -618,10 +627,10 @@ fn animate_command(
         );
     }
     if let Some(deformation) = deformation {
-        built.motion = Motion::Deform {
+        built.set_motion(Motion::Deform {
             deformation,
             amplitude,
-        };
+        });
     }
     let defaults = AnimateOptions::default();
     let opts = AnimateOptions {
@@ -655,6 +664,174 @@ fn animate_command(
     ExitCode::SUCCESS
 }
 
+/// `nlrt watertight` on one object of a scene (`built` traced alone, its `others` not looked
+/// at): `scene` labels its rows and messages, `stem` names its leak images, `header` prints
+/// the table's header first.
+#[allow(clippy::too_many_arguments)]
+fn judge_object(
+    built: &scenes::Scene,
+    scene: &str,
+    stem: &str,
+    header: bool,
+    rays: u64,
+    precision: Option<Precision>,
+    method: Option<MethodKind>,
+    ghost_samples: Option<u64>,
+    frame: Option<u32>,
+    frames: u32,
+    output: &Option<PathBuf>,
+) -> Result<(), String> {
+    let side = ((rays as f64).sqrt().ceil() as usize).max(1);
+    // Shell-mapped scenes are judged for nonlinear tracing only (the other judged
+    // methods displace a height field); asking for another says so.
+    let shell = matches!(built.content, scenes::Content::Shell(_));
+    let mut methods = watertight::METHODS
+        .into_iter()
+        .filter(|m| {
+            let precision_ok = match precision {
+                Some(Precision::F32) => m.name().ends_with("f32"),
+                Some(Precision::F64) => m.name().ends_with("f64"),
+                None => true,
+            };
+            let method_ok = match method {
+                Some(MethodKind::Nonlinear) => {
+                    matches!(m, Method::NonlinearF32 | Method::NonlinearF64)
+                }
+                Some(MethodKind::TessellationFree) => {
+                    matches!(m, Method::AffineF32 | Method::AffineF64)
+                }
+                Some(MethodKind::Marching) => {
+                    matches!(m, Method::MarchingF32 | Method::MarchingF64)
+                }
+                Some(MethodKind::DistanceMap) => {
+                    matches!(m, Method::DistanceMapF32 | Method::DistanceMapF64)
+                }
+                Some(MethodKind::Tetrahedra) => {
+                    matches!(m, Method::TetrahedraF32 | Method::TetrahedraF64)
+                }
+                Some(
+                    MethodKind::Tessellated
+                    | MethodKind::Embree
+                    | MethodKind::TessellatedCurved
+                    | MethodKind::GeometryImage
+                    | MethodKind::Projective
+                    | MethodKind::Curved
+                    | MethodKind::ConeRay
+                    | MethodKind::ConeCone,
+                ) => false,
+                None => !shell || matches!(m, Method::NonlinearF32 | Method::NonlinearF64),
+            };
+            precision_ok && method_ok
+        })
+        .peekable();
+    if methods.peek().is_none() {
+        let judged: Vec<&str> = watertight::METHODS.iter().map(|m| m.slug()).collect();
+        return Err(format!(
+            "no method to judge: watertightness is measured for {} (the references are what it judges against; the other methods have no per-texel surface to decide leaks on)",
+            judged.join(", ")
+        ));
+    }
+    // Methods the scene's map does not suit (a cone or distance map on a map that is
+    // not square with a power-of-two side) are left out, and said so; asked for alone,
+    // the reason is the error.
+    let (methods, unsupported): (Vec<Method>, Vec<Method>) =
+        methods.partition(|m| shell || m.unsupported_reason_for_object(built).is_none());
+    if let Some(first) = unsupported.first() {
+        let why = first
+            .unsupported_reason_for_object(built)
+            .unwrap_or_default();
+        if methods.is_empty() {
+            return Err(format!("{scene}: {}: {why}", first.name()));
+        }
+        let names: Vec<&str> = unsupported.iter().map(|m| m.name()).collect();
+        eprintln!("{scene}: not judged: {} ({why})", names.join(", "));
+    }
+    if header {
+        println!(
+            "| scene | method | rays | decided | leaks | rate | 95% interval | ghost hits (of hits judged) | grazing | too far | hit distance vs oracle: median / p99 / max rel. error (hits compared, unverified) | seconds |"
+        );
+        println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
+    }
+    let judged_hits = ghost_samples.map_or(watertight::JudgedHits::Every, |n| {
+        watertight::JudgedHits::Spaced {
+            ghosts: usize::try_from(n).unwrap_or(usize::MAX),
+            distances: watertight::DISTANCE_SAMPLES,
+        }
+    });
+    let at = frame.map(|k| (k as usize, frames as usize));
+    let reports = match watertight::measure_all_at_frame(built, at, side, &methods, judged_hits) {
+        Ok(r) => r,
+        Err(e) => return Err(format!("{scene}: {e}")),
+    };
+    let label = frame.map_or(scene.to_string(), |k| {
+        format!("{scene} frame {k} of {frames}")
+    });
+    let seams = built.describe_seams();
+    if !seams.is_empty() {
+        eprintln!("{scene}: {}", seams.trim_start_matches(", "));
+    }
+    let mut where_leaked = Vec::new();
+    for r in reports {
+        if !r.leak_edges.is_empty() {
+            // At most this many places listed per method: enough to find them again.
+            const LISTED: usize = 8;
+            let places: Vec<String> = r
+                .leak_edges
+                .iter()
+                .take(LISTED)
+                .map(|e| {
+                    format!(
+                        "triangle {} edge {}{}: {}",
+                        e.triangle,
+                        e.edge,
+                        if e.seam { " (seam)" } else { "" },
+                        e.leaks
+                    )
+                })
+                .collect();
+            let more = r.leak_edges.len().saturating_sub(LISTED);
+            where_leaked.push(format!(
+                "{}: leaks by base triangle and nearest edge: {}{}",
+                r.method,
+                places.join(", "),
+                if more > 0 {
+                    format!(", and {more} more")
+                } else {
+                    String::new()
+                }
+            ));
+        }
+        let (lo, hi) = r.wilson_95();
+        println!(
+            "| {label} | {} | {} | {} | {} | {:.2e} | [{:.1e}, {:.1e}] | {} | {} | {:.1} |",
+            r.method,
+            r.rays,
+            r.decided,
+            r.leaks,
+            r.rate(),
+            lo,
+            hi,
+            ghost_cell(&r),
+            distance_cell(&r),
+            r.seconds
+        );
+        if let Some(dir) = output
+            && !shell
+        {
+            let path = dir.join(format!("{stem}-leaks-{}.png", r.method.slug()));
+            if let Err(e) = std::fs::create_dir_all(dir).and_then(|()| {
+                nlrt_render::image::write_png(&path, side, side, &watertight::leak_image(&r))
+            }) {
+                return Err(format!("cannot write {}: {e}", path.display()));
+            }
+        }
+    }
+    for line in where_leaked {
+        println!("{line}");
+    }
+    Ok(())
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let seam_rule = if cli.no_seam_fix {
@@ -675,6 +852,7 @@ fn main() -> ExitCode {
             PathBuf::from("nlrt-report"),
             &args,
             REPORT_SOLVER_SAMPLES,
+            Vec::new(),
             seam_rule,
         );
     };
@@ -833,7 +1011,8 @@ fn main() -> ExitCode {
             output,
             args,
             solver_samples,
-        } => report_command(output, &args, solver_samples, seam_rule),
+            scenes,
+        } => report_command(output, &args, solver_samples, scenes, seam_rule),
         Command::Edit {
             scene_size,
             strokes,
@@ -883,13 +1062,17 @@ fn main() -> ExitCode {
             scene_size,
             output,
         } => {
-            if let Err(e) = check_scenes(std::slice::from_ref(&scene)) {
-                return fail("export", e);
-            }
-            let Some(built) = scenes::builtin(&scene, scene_size.into()) else {
-                return fail("export", "unknown scene");
+            let built = match nlrt_render::scene_file::builtin_or_file(&scene, scene_size.into()) {
+                Ok(s) => s,
+                Err(e) => return fail("export", e),
             };
-            match nlrt_render::scene_file::export(&built, &output) {
+            // A scene file is written under its own stem (its scenes are all named "file").
+            let name = std::path::Path::new(&scene)
+                .file_stem()
+                .and_then(|s| s.to_str())
+                .filter(|_| scene.ends_with(".toml"))
+                .unwrap_or(built.name);
+            match nlrt_render::scene_file::export_as(&built, name, &output) {
                 Ok(path) => {
                     println!("{scene} written to {}", path.display());
                     ExitCode::SUCCESS
@@ -929,7 +1112,7 @@ fn main() -> ExitCode {
                 }
             };
             let mut built = built;
-            built.seam_rule = seam_rule;
+            built.set_seam_rule(seam_rule);
             if let Some(k) = frame
                 && k >= frames
             {
@@ -947,159 +1130,30 @@ fn main() -> ExitCode {
             {
                 return fail("watertight", format!("{scene}: {e}"));
             }
-            let side = ((rays as f64).sqrt().ceil() as usize).max(1);
-            // Shell-mapped scenes are judged for nonlinear tracing only (the other judged
-            // methods displace a height field); asking for another says so.
-            let shell = matches!(built.content, scenes::Content::Shell(_));
-            let mut methods = watertight::METHODS
-                .into_iter()
-                .filter(|m| {
-                    let precision_ok = match precision {
-                        Some(Precision::F32) => m.name().ends_with("f32"),
-                        Some(Precision::F64) => m.name().ends_with("f64"),
-                        None => true,
-                    };
-                    let method_ok = match method {
-                        Some(MethodKind::Nonlinear) => {
-                            matches!(m, Method::NonlinearF32 | Method::NonlinearF64)
-                        }
-                        Some(MethodKind::TessellationFree) => {
-                            matches!(m, Method::AffineF32 | Method::AffineF64)
-                        }
-                        Some(MethodKind::Marching) => {
-                            matches!(m, Method::MarchingF32 | Method::MarchingF64)
-                        }
-                        Some(MethodKind::DistanceMap) => {
-                            matches!(m, Method::DistanceMapF32 | Method::DistanceMapF64)
-                        }
-                        Some(MethodKind::Tetrahedra) => {
-                            matches!(m, Method::TetrahedraF32 | Method::TetrahedraF64)
-                        }
-                        Some(
-                            MethodKind::Tessellated
-                            | MethodKind::Embree
-                            | MethodKind::TessellatedCurved
-                            | MethodKind::GeometryImage
-                            | MethodKind::Projective
-                            | MethodKind::Curved
-                            | MethodKind::ConeRay
-                            | MethodKind::ConeCone,
-                        ) => false,
-                        None => !shell || matches!(m, Method::NonlinearF32 | Method::NonlinearF64),
-                    };
-                    precision_ok && method_ok
-                })
-                .peekable();
-            if methods.peek().is_none() {
-                let judged: Vec<&str> = watertight::METHODS.iter().map(|m| m.slug()).collect();
-                return fail(
-                    "watertight",
-                    format!(
-                        "no method to judge: watertightness is measured for {} (the references are what it judges against; the other methods have no per-texel surface to decide leaks on)",
-                        judged.join(", ")
-                    ),
-                );
-            }
-            // Methods the scene's map does not suit (a cone or distance map on a map that is
-            // not square with a power-of-two side) are left out, and said so; asked for alone,
-            // the reason is the error.
-            let (methods, unsupported): (Vec<Method>, Vec<Method>) =
-                methods.partition(|m| shell || m.supports(&built));
-            if let Some(first) = unsupported.first() {
-                let why = first.unsupported_reason(&built).unwrap_or_default();
-                if methods.is_empty() {
-                    return fail("watertight", format!("{scene}: {}: {why}", first.name()));
-                }
-                let names: Vec<&str> = unsupported.iter().map(|m| m.name()).collect();
-                eprintln!("{scene}: not judged: {} ({why})", names.join(", "));
-            }
-            println!(
-                "| scene | method | rays | decided | leaks | rate | 95% interval | ghost hits (of hits judged) | grazing | too far | hit distance vs oracle: median / p99 / max rel. error (hits compared, unverified) | seconds |"
-            );
-            println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
-            let judged_hits = ghost_samples.map_or(watertight::JudgedHits::Every, |n| {
-                watertight::JudgedHits::Spaced {
-                    ghosts: usize::try_from(n).unwrap_or(usize::MAX),
-                    distances: watertight::DISTANCE_SAMPLES,
-                }
-            });
-            let at = frame.map(|k| (k as usize, frames as usize));
-            let reports =
-                match watertight::measure_all_at_frame(&built, at, side, &methods, judged_hits) {
-                    Ok(r) => r,
-                    Err(e) => return fail("watertight", format!("{scene}: {e}")),
+            for (k, object) in built.objects().enumerate() {
+                let (label, stem) = if built.others.is_empty() {
+                    (scene.clone(), scene.clone())
+                } else {
+                    (
+                        format!("{scene} object {}", k + 1),
+                        format!("{scene}-object-{}", k + 1),
+                    )
                 };
-            let label = frame.map_or(scene.clone(), |k| format!("{scene} frame {k} of {frames}"));
-            let seams = built.describe_seams();
-            if !seams.is_empty() {
-                eprintln!("{scene}: {}", seams.trim_start_matches(", "));
-            }
-            let mut where_leaked = Vec::new();
-            for r in reports {
-                if !r.leak_edges.is_empty() {
-                    // At most this many places listed per method: enough to find them again.
-                    const LISTED: usize = 8;
-                    let places: Vec<String> = r
-                        .leak_edges
-                        .iter()
-                        .take(LISTED)
-                        .map(|e| {
-                            format!(
-                                "triangle {} edge {}{}: {}",
-                                e.triangle,
-                                e.edge,
-                                if e.seam { " (seam)" } else { "" },
-                                e.leaks
-                            )
-                        })
-                        .collect();
-                    let more = r.leak_edges.len().saturating_sub(LISTED);
-                    where_leaked.push(format!(
-                        "{}: leaks by base triangle and nearest edge: {}{}",
-                        r.method,
-                        places.join(", "),
-                        if more > 0 {
-                            format!(", and {more} more")
-                        } else {
-                            String::new()
-                        }
-                    ));
+                if let Err(e) = judge_object(
+                    object,
+                    &label,
+                    &stem,
+                    k == 0,
+                    rays,
+                    precision,
+                    method,
+                    ghost_samples,
+                    frame,
+                    frames,
+                    &output,
+                ) {
+                    return fail("watertight", e);
                 }
-                let (lo, hi) = r.wilson_95();
-                println!(
-                    "| {label} | {} | {} | {} | {} | {:.2e} | [{:.1e}, {:.1e}] | {} | {} | {:.1} |",
-                    r.method,
-                    r.rays,
-                    r.decided,
-                    r.leaks,
-                    r.rate(),
-                    lo,
-                    hi,
-                    ghost_cell(&r),
-                    distance_cell(&r),
-                    r.seconds
-                );
-                if let Some(dir) = &output
-                    && !shell
-                {
-                    let path = dir.join(format!("{scene}-leaks-{}.png", r.method.slug()));
-                    if let Err(e) = std::fs::create_dir_all(dir).and_then(|()| {
-                        nlrt_render::image::write_png(
-                            &path,
-                            side,
-                            side,
-                            &watertight::leak_image(&r),
-                        )
-                    }) {
-                        return fail(
-                            "watertight",
-                            format!("cannot write {}: {e}", path.display()),
-                        );
-                    }
-                }
-            }
-            for line in where_leaked {
-                println!("{line}");
             }
             ExitCode::SUCCESS
         }

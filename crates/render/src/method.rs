@@ -1,6 +1,7 @@
 //! The methods a scene can be rendered with, by name ([`Method`]): which scenes each
 //! supports, and the [`Tracer`] each builds.
 
+use crate::objects::ObjectUnion;
 use crate::resample::GeometryImageTracer;
 use crate::scenes::{Content, Scene};
 use crate::tessellate::Tessellated;
@@ -217,9 +218,18 @@ impl Method {
         self.unsupported_reason(scene).is_none()
     }
 
-    /// Why the method cannot render `scene`, or `None` when it can.
+    /// Why the method cannot render `scene` (one of its objects), or `None` when it can.
     #[must_use]
     pub fn unsupported_reason(self, scene: &Scene) -> Option<&'static str> {
+        scene
+            .objects()
+            .find_map(|object| self.unsupported_reason_for_object(object))
+    }
+
+    /// Why the method cannot render the object `scene` alone (its `others` not looked at),
+    /// or `None` when it can.
+    #[must_use]
+    pub fn unsupported_reason_for_object(self, scene: &Scene) -> Option<&'static str> {
         match self {
             Method::AffineF32 | Method::AffineF64 => {
                 (!matches!(scene.content, Content::Displacement(_))).then_some(
@@ -285,11 +295,25 @@ impl Method {
     }
 
     /// Builds the method's acceleration data for `scene`; `None` when it does not support it.
+    /// A scene of several objects gets each object's own data, traced as one
+    /// ([`ObjectUnion`]).
     #[must_use]
     pub fn build(self, scene: &Scene) -> Option<Box<dyn Tracer>> {
         if !self.supports(scene) {
             return None;
         }
+        if scene.others.is_empty() {
+            return self.build_object(scene);
+        }
+        let parts = scene
+            .objects()
+            .map(|object| Some((self.build_object(object)?, object.triangles.len())))
+            .collect::<Option<Vec<_>>>()?;
+        Some(Box::new(ObjectUnion::new(parts)))
+    }
+
+    /// [`Method::build`] for the object `scene` alone (its `others` not looked at).
+    fn build_object(self, scene: &Scene) -> Option<Box<dyn Tracer>> {
         Some(match self {
             Method::NonlinearF32 => Box::new(Nonlinear::<f32>::new(scene)),
             Method::NonlinearF64 => Box::new(Nonlinear::<f64>::new(scene)),

@@ -6,7 +6,7 @@ use crate::image::write_png;
 use crate::integrator::{Frame, RenderOptions, render, render_recording};
 use crate::method::Method;
 use crate::ray_stream::{RayKind, RayStream, Replay, replay};
-use crate::scenes::{self, Scene, Size};
+use crate::scenes::{Scene, Size};
 use crate::tracer::Tracer;
 use std::fmt::Write as _;
 use std::io::IsTerminal;
@@ -569,17 +569,13 @@ pub fn run_with_rows(opts: &ReportOptions) -> Result<(String, Vec<TableRow>), St
     let mut ran = Vec::new();
     let mut points = Vec::new();
     for name in &opts.scenes {
-        let Some(mut scene) = scenes::builtin(name, opts.size) else {
-            return Err(format!(
-                "unknown scene '{name}' (built-in scenes: {})",
-                scenes::SCENE_NAMES.join(", ")
-            ));
-        };
-        scene.seam_rule = opts.seam_rule;
+        let mut scene = crate::scene_file::builtin_or_file(name, opts.size)?;
+        scene.set_seam_rule(opts.seam_rule);
+        let stem = image_stem(name);
         eprintln!(
             "scene {name}: {} base triangles, {}{}",
-            scene.triangles.len(),
-            scene.content.describe(),
+            scene.triangle_count(),
+            scene.describe_content(),
             scene.describe_seams()
         );
         let (runs, recorded) = run_scene_with_stream(&scene, opts);
@@ -645,11 +641,11 @@ pub fn run_with_rows(opts: &ReportOptions) -> Result<(String, Vec<TableRow>), St
                 )),
             );
             if let Some(dir) = &opts.out_dir {
-                let path = dir.join(format!("{name}-{}.png", m.method.slug()));
+                let path = dir.join(format!("{stem}-{}.png", m.method.slug()));
                 write_png(&path, m.frame.width, m.frame.height, &m.frame.rgb8())
                     .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
                 if let Some(reference) = reference.filter(|_| !m.method.is_reference()) {
-                    let path = dir.join(format!("{name}-{}-diff.png", m.method.slug()));
+                    let path = dir.join(format!("{stem}-{}-diff.png", m.method.slug()));
                     write_png(
                         &path,
                         m.frame.width,
@@ -694,7 +690,7 @@ pub fn run_with_rows(opts: &ReportOptions) -> Result<(String, Vec<TableRow>), St
         for (name, methods) in &ran {
             let cells: Vec<String> = methods
                 .iter()
-                .map(|m| format!("![{name} {m}]({name}-{}.png)", m.slug()))
+                .map(|m| format!("![{name} {m}]({}-{}.png)", image_stem(name), m.slug()))
                 .collect();
             let _ = writeln!(md, "{name}: {}\n", cells.join(" "));
             let diffs: Vec<String> = methods
@@ -702,7 +698,8 @@ pub fn run_with_rows(opts: &ReportOptions) -> Result<(String, Vec<TableRow>), St
                 .filter(|&&m| !m.is_reference() && methods.contains(&m.reference()))
                 .map(|m| {
                     format!(
-                        "![{name} {m} minus reference]({name}-{}-diff.png)",
+                        "![{name} {m} minus reference]({}-{}-diff.png)",
+                        image_stem(name),
                         m.slug()
                     )
                 })
@@ -718,6 +715,18 @@ pub fn run_with_rows(opts: &ReportOptions) -> Result<(String, Vec<TableRow>), St
         let _ = Path::new(dir);
     }
     Ok((md, rows))
+}
+
+/// The start of a scene's image names: its name, or a scene file's stem (a path is no file
+/// name).
+fn image_stem(name: &str) -> String {
+    match std::path::Path::new(name)
+        .file_stem()
+        .and_then(|s| s.to_str())
+    {
+        Some(stem) if name.ends_with(".toml") => stem.to_string(),
+        _ => name.to_string(),
+    }
 }
 
 #[cfg(test)]

@@ -50,11 +50,27 @@ use std::path::{Path, PathBuf};
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct File {
-    mesh: MeshSection,
+    mesh: Option<MeshSection>,
     displacement: Option<DisplacementSection>,
     shell: Option<ShellSection>,
+    object: Option<Vec<ObjectSection>>,
     camera: CameraSection,
     animation: Option<AnimationSection>,
+}
+
+/// One `[[object]]` table: a base mesh placed in the scene, and what fills its shell.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ObjectSection {
+    obj: PathBuf,
+    #[serde(default)]
+    material: MaterialName,
+    #[serde(default)]
+    translate: [f64; 3],
+    #[serde(default = "one")]
+    scale: f64,
+    displacement: Option<DisplacementSection>,
+    shell: Option<ShellSection>,
 }
 
 #[derive(Deserialize)]
@@ -151,6 +167,25 @@ pub struct Source<'a> {
     pub max_map_side: usize,
 }
 
+/// A built-in scene by name ([`crate::scenes::builtin`] at `size`), or the scene file at
+/// `name` when it ends in `.toml` (its maps at their own size).
+///
+/// # Errors
+/// An unknown name (the message lists the built-in scenes), or the reasons of [`load`].
+pub fn builtin_or_file(name: &str, size: crate::scenes::Size) -> Result<Scene, String> {
+    if name.ends_with(".toml") {
+        return load(Path::new(name));
+    }
+    let known = crate::scenes::is_builtin(name);
+    crate::scenes::builtin(name, size).filter(|_| known).ok_or_else(|| {
+        format!(
+            "unknown scene '{name}' (built-in scenes: {}; variants: {}; or a scene file *.toml)",
+            crate::scenes::SCENE_NAMES.join(", "),
+            crate::scenes::VARIANT_NAMES.join(", ")
+        )
+    })
+}
+
 /// Loads a scene file.
 ///
 /// # Errors
@@ -187,76 +222,63 @@ pub fn load_from(path: &Path, source: &Source<'_>) -> Result<Scene, String> {
         format!("{}{line}: {}", path.display(), e.message())
     })?;
     let dir = path.parent().unwrap_or(Path::new("."));
-    let (positions, normals, uvs, triangles) = load_obj(&dir.join(&file.mesh.obj), source, true)?;
+    let in_file = |m: String| format!("{}: {m}", path.display());
+    let several = file.object.is_some();
+    let sections = match (file.mesh, file.object) {
+        (Some(mesh), None) => vec![ObjectSection {
+            obj: mesh.obj,
+            material: mesh.material,
+            translate: [0.0; 3],
+            scale: 1.0,
+            displacement: file.displacement,
+            shell: file.shell,
+        }],
+        (None, Some(objects)) => {
+            if file.displacement.is_some() || file.shell.is_some() {
+                return Err(in_file(
+                    "with [[object]] tables, each object has its own [object.displacement] or [object.shell]; a top-level [displacement] or [shell] belongs to a [mesh]".into(),
+                ));
+            }
+            if objects.is_empty() || objects.len() > MAX_OBJECTS {
+                return Err(in_file(format!(
+                    "{} [[object]] tables; between 1 and {MAX_OBJECTS} are accepted",
+                    objects.len()
+                )));
+            }
+            objects
+        }
+        (Some(_), Some(_)) => {
+            return Err(in_file(
+                "give either one [mesh] or [[object]] tables, not both".into(),
+            ));
+        }
+        (None, None) => {
+            return Err(in_file(
+                "a [mesh] section or [[object]] tables are required".into(),
+            ));
+        }
+    };
+    let mut limit = MapLimit {
+        side: source.max_map_side,
+        samples: source.max_map_side.saturating_mul(source.max_map_side),
+    };
+    let mut objects = Vec::with_capacity(sections.len());
+    let label = path.display().to_string();
+    for (k, section) in sections.into_iter().enumerate() {
+        let object = load_object(&label, dir, source, &mut limit, section);
+        objects.push(object.map_err(|e| {
+            if several {
+                format!("object {}: {e}", k + 1)
+            } else {
+                e
+            }
+        })?);
+    }
     let check = |what: &str, v: f64, ok: bool| {
         if ok {
             Ok(())
         } else {
-            Err(format!("{}: {what} = {v} is out of range", path.display()))
-        }
-    };
-    let (content, height_scale, tiling, midlevel) = match (&file.displacement, &file.shell) {
-        (Some(d), None) => {
-            check(
-                "height_scale",
-                d.height_scale,
-                d.height_scale.is_finite() && d.height_scale > 0.0,
-            )?;
-            check(
-                "tiling",
-                d.tiling,
-                d.tiling.is_finite() && d.tiling > 0.0 && d.tiling <= 1e6,
-            )?;
-            check("midlevel", d.midlevel, (0.0..=1.0).contains(&d.midlevel))?;
-            let mut field = load_height_map(&dir.join(&d.height_map), source, d.normalize)?;
-            if let WrapName::Clamp = d.wrap {
-                // The samples were valid under one wrap, so they are under the other.
-                field = HeightField::new(
-                    field.width(),
-                    field.height(),
-                    field.samples().to_vec(),
-                    Wrap::Clamp,
-                )
-                .map_err(|e| format!("{}: {e}", path.display()))?;
-            }
-            (
-                Content::Displacement(field),
-                d.height_scale,
-                d.tiling,
-                d.midlevel,
-            )
-        }
-        (None, Some(s)) => {
-            check(
-                "height_scale",
-                s.height_scale,
-                s.height_scale.is_finite() && s.height_scale > 0.0,
-            )?;
-            check(
-                "tiling",
-                s.tiling,
-                s.tiling.is_finite() && s.tiling > 0.0 && s.tiling <= 1e6,
-            )?;
-            let object_path = dir.join(&s.object);
-            let (p, _, _, t) = load_obj(&object_path, source, false)?;
-            let object: Vec<[DVec3; 3]> = t.iter().map(|t| t.map(|i| p[i as usize])).collect();
-            if let Some(bad) = object
-                .iter()
-                .flatten()
-                .find(|v| !(v.min_element() >= 0.0 && v.max_element() <= 1.0))
-            {
-                return Err(format!(
-                    "{}: object vertex {bad} is outside the unit tile [0, 1]^3 (objects are given as (u, v, h))",
-                    object_path.display()
-                ));
-            }
-            (Content::Shell(object), s.height_scale, s.tiling, 0.0)
-        }
-        _ => {
-            return Err(format!(
-                "{}: exactly one of [displacement] and [shell] is required",
-                path.display()
-            ));
+            Err(in_file(format!("{what} = {v} is out of range")))
         }
     };
     let c = &file.camera;
@@ -293,33 +315,47 @@ pub fn load_from(path: &Path, source: &Source<'_>) -> Result<Scene, String> {
         ));
     }
     let sun = (sun / largest).normalize();
-    let motion = match &file.animation {
-        None => Motion::Static,
-        Some(a) => load_motion(path, a, dir, source, (&positions, &uvs, &triangles))?,
+    let camera = Camera {
+        eye: DVec3::from(c.eye),
+        target: DVec3::from(c.target),
+        fov_degrees: c.fov_degrees,
     };
-    let scene = Scene {
-        name: "file",
-        positions,
-        normals,
-        uvs,
-        triangles,
-        content,
-        height_scale,
-        tiling,
-        camera: Camera {
-            eye: DVec3::from(c.eye),
-            target: DVec3::from(c.target),
-            fov_degrees: c.fov_degrees,
-        },
-        sun,
-        material: match file.mesh.material {
-            MaterialName::Diffuse => Material::Diffuse,
-            MaterialName::Glossy => Material::GLOSSY,
-        },
-        motion,
-        seam_rule: nlrt_accel::SeamRule::Closed,
-        midlevel,
-    };
+    let mut scenes = Vec::with_capacity(objects.len());
+    for object in objects {
+        scenes.push(Scene {
+            name: "file",
+            positions: object.positions,
+            normals: object.normals,
+            uvs: object.uvs,
+            triangles: object.triangles,
+            content: object.content,
+            height_scale: object.height_scale,
+            tiling: object.tiling,
+            camera,
+            sun,
+            material: object.material,
+            motion: Motion::Static,
+            seam_rule: nlrt_accel::SeamRule::Closed,
+            midlevel: object.midlevel,
+            others: Vec::new(),
+        });
+    }
+    let mut scene = scenes.remove(0);
+    scene.others = scenes;
+    if let Some(a) = &file.animation {
+        if a.frames.is_some() && !scene.others.is_empty() {
+            return Err(in_file(
+                "[animation] frames are poses of one base mesh; a file of several objects moves them by a deformation".into(),
+            ));
+        }
+        let rest = (
+            scene.positions.as_slice(),
+            scene.uvs.as_slice(),
+            scene.triangles.as_slice(),
+        );
+        let motion = load_motion(path, a, dir, source, rest)?;
+        scene.set_motion(motion);
+    }
     // Mesh values, height scale and tiling as the tracers will see them in f64 (f32 is
     // checked when an f32 method is asked for).
     scene
@@ -329,6 +365,144 @@ pub fn load_from(path: &Path, source: &Source<'_>) -> Result<Scene, String> {
 }
 
 type ObjData = (Vec<DVec3>, Vec<DVec3>, Vec<DVec2>, Vec<[u32; 3]>);
+
+/// The most `[[object]]` tables a scene file may have ([`crate::objects::MAX_OBJECTS`]).
+pub const MAX_OBJECTS: usize = crate::objects::MAX_OBJECTS;
+
+/// One object of a scene file, loaded and placed.
+struct ObjectData {
+    positions: Vec<DVec3>,
+    normals: Vec<DVec3>,
+    uvs: Vec<DVec2>,
+    triangles: Vec<[u32; 3]>,
+    content: Content,
+    height_scale: f64,
+    tiling: f64,
+    midlevel: f64,
+    material: Material,
+}
+
+/// Loads an object's mesh and map or tile object and places it by its `translate` and
+/// `scale` (the whole object, its height scale too, as an instance transform would); `label`
+/// (the scene file) starts the messages about its values; `limit` is what its height map may take, less what it took after.
+fn load_object(
+    label: &str,
+    dir: &Path,
+    source: &Source<'_>,
+    limit: &mut MapLimit,
+    section: ObjectSection,
+) -> Result<ObjectData, String> {
+    let check = |what: &str, v: f64, ok: bool| {
+        if ok {
+            Ok(())
+        } else {
+            Err(format!("{label}: {what} = {v} is out of range"))
+        }
+    };
+    check(
+        "scale",
+        section.scale,
+        section.scale.is_finite() && section.scale > 0.0,
+    )?;
+    if !section.translate.iter().all(|x| x.is_finite()) {
+        return Err(format!(
+            "{label}: translate = {:?} must be finite numbers",
+            section.translate
+        ));
+    }
+    let (mut positions, normals, uvs, triangles) = load_obj(&dir.join(&section.obj), source, true)?;
+    let (content, height_scale, tiling, midlevel) = match (section.displacement, section.shell) {
+        (Some(d), None) => {
+            check(
+                "height_scale",
+                d.height_scale,
+                d.height_scale.is_finite() && d.height_scale > 0.0,
+            )?;
+            check(
+                "tiling",
+                d.tiling,
+                d.tiling.is_finite() && d.tiling > 0.0 && d.tiling <= 1e6,
+            )?;
+            check("midlevel", d.midlevel, (0.0..=1.0).contains(&d.midlevel))?;
+            let mut field = load_height_map(&dir.join(&d.height_map), source, *limit, d.normalize)?;
+            limit.samples -= field.width() * field.height();
+            if let WrapName::Clamp = d.wrap {
+                // The samples were valid under one wrap, so they are under the other.
+                field = HeightField::new(
+                    field.width(),
+                    field.height(),
+                    field.samples().to_vec(),
+                    Wrap::Clamp,
+                )
+                .map_err(|e| format!("{label}: {e}"))?;
+            }
+            (
+                Content::Displacement(field),
+                d.height_scale,
+                d.tiling,
+                d.midlevel,
+            )
+        }
+        (None, Some(s)) => {
+            check(
+                "height_scale",
+                s.height_scale,
+                s.height_scale.is_finite() && s.height_scale > 0.0,
+            )?;
+            check(
+                "tiling",
+                s.tiling,
+                s.tiling.is_finite() && s.tiling > 0.0 && s.tiling <= 1e6,
+            )?;
+            let object_path = dir.join(&s.object);
+            let (p, _, _, t) = load_obj(&object_path, source, false)?;
+            let object: Vec<[DVec3; 3]> = t.iter().map(|t| t.map(|i| p[i as usize])).collect();
+            if let Some(bad) = object
+                .iter()
+                .flatten()
+                .find(|v| !(v.min_element() >= 0.0 && v.max_element() <= 1.0))
+            {
+                return Err(format!(
+                    "{}: object vertex {bad} is outside the unit tile [0, 1]^3 (objects are given as (u, v, h))",
+                    object_path.display()
+                ));
+            }
+            (Content::Shell(object), s.height_scale, s.tiling, 0.0)
+        }
+        _ => {
+            return Err(format!(
+                "{label}: exactly one of [displacement] and [shell] is required"
+            ));
+        }
+    };
+    let (scale, translate) = (section.scale, DVec3::from(section.translate));
+    if scale != 1.0 || translate != DVec3::ZERO {
+        for p in &mut positions {
+            *p = *p * scale + translate;
+        }
+    }
+    let height_scale = height_scale * scale;
+    // Placed values must stay finite (the mesh itself is checked with the scene).
+    check(
+        "height_scale x scale",
+        height_scale,
+        height_scale.is_finite(),
+    )?;
+    Ok(ObjectData {
+        positions,
+        normals,
+        uvs,
+        triangles,
+        content,
+        height_scale,
+        tiling,
+        midlevel,
+        material: match section.material {
+            MaterialName::Diffuse => Material::Diffuse,
+            MaterialName::Glossy => Material::GLOSSY,
+        },
+    })
+}
 
 /// The motion of an `[animation]` section; `rest` is the base mesh's positions, uvs and
 /// triangles, which every pose file must match (but for its positions and normals).
@@ -566,11 +740,28 @@ fn load_obj(path: &Path, source: &Source<'_>, base: bool) -> Result<ObjData, Str
 /// from the file's header, before anything is allocated.
 pub const MAX_MAP_SIDE: usize = 16_384;
 
-/// Whether a `w x h` map fits `max_side`, with the message that says why not.
-fn check_map_size(w: usize, h: usize, max_side: usize) -> Result<(), String> {
+/// How large the next height map of a scene file may be: its largest side, and the samples
+/// left to the file (all of its objects' maps together hold at most as many samples as one
+/// map of the largest side, so a file of many objects cannot multiply the memory).
+#[derive(Clone, Copy)]
+struct MapLimit {
+    side: usize,
+    samples: usize,
+}
+
+/// Whether a `w x h` map fits `limit`, with the message that says why not.
+fn check_map_size(w: usize, h: usize, limit: MapLimit) -> Result<(), String> {
+    let max_side = limit.side;
     if w > max_side || h > max_side {
         return Err(format!(
             "height map is {w} x {h}; the largest side a scene file may use is {max_side}"
+        ));
+    }
+    if w.saturating_mul(h) > limit.samples {
+        return Err(format!(
+            "height map is {w} x {h}; the scene file's maps together may hold {} samples (one map of side {max_side}), and {} are left",
+            max_side * max_side,
+            limit.samples
         ));
     }
     Ok(())
@@ -582,15 +773,16 @@ fn check_map_size(w: usize, h: usize, max_side: usize) -> Result<(), String> {
 fn load_height_map(
     path: &Path,
     source: &Source<'_>,
+    limit: MapLimit,
     normalize: bool,
 ) -> Result<HeightField, String> {
     let err = |m: String| format!("{}: {m}", path.display());
     let bytes = (source.read)(path)?;
     let extension = path.extension().map(|e| e.to_ascii_lowercase());
     match extension.as_ref().and_then(|e| e.to_str()) {
-        Some("exr") => return load_exr_height_map(path, &bytes, source.max_map_side, normalize),
+        Some("exr") => return load_exr_height_map(path, &bytes, limit, normalize),
         Some("tif" | "tiff") => {
-            return load_tiff_height_map(path, &bytes, source.max_map_side, normalize);
+            return load_tiff_height_map(path, &bytes, limit, normalize);
         }
         _ => {}
     }
@@ -600,12 +792,7 @@ fn load_height_map(
         .read_info()
         .map_err(|e| err(format!("not a readable PNG: {e}")))?;
     let header = reader.info();
-    check_map_size(
-        header.width as usize,
-        header.height as usize,
-        source.max_map_side,
-    )
-    .map_err(err)?;
+    check_map_size(header.width as usize, header.height as usize, limit).map_err(err)?;
     let mut buf = vec![
         0;
         reader
@@ -649,7 +836,7 @@ fn load_height_map(
 fn load_exr_height_map(
     path: &Path,
     bytes: &[u8],
-    max_side: usize,
+    limit: MapLimit,
     normalize: bool,
 ) -> Result<HeightField, String> {
     use exr::prelude::*;
@@ -659,7 +846,7 @@ fn load_exr_height_map(
         .map_err(|e| err(format!("not a readable OpenEXR file: {e}")))?;
     for header in &meta.headers {
         let size = header.layer_size;
-        check_map_size(size.width(), size.height(), max_side).map_err(err)?;
+        check_map_size(size.width(), size.height(), limit).map_err(err)?;
     }
     let image = read()
         .no_deep_data()
@@ -695,7 +882,7 @@ fn load_exr_height_map(
 fn load_tiff_height_map(
     path: &Path,
     bytes: &[u8],
-    max_side: usize,
+    limit: MapLimit,
     normalize: bool,
 ) -> Result<HeightField, String> {
     use tiff::decoder::{Decoder, DecodingResult, Limits};
@@ -705,7 +892,7 @@ fn load_tiff_height_map(
     // The header first: a small file may claim any size, and decoding would allocate it.
     let (w, h) = decoder.dimensions().map_err(unreadable)?;
     let (w, h) = (w as usize, h as usize);
-    check_map_size(w, h, max_side).map_err(err)?;
+    check_map_size(w, h, limit).map_err(err)?;
     match decoder.colortype().map_err(unreadable)? {
         tiff::ColorType::Gray(_) => {}
         other => {
@@ -716,7 +903,7 @@ fn load_tiff_height_map(
     }
     // Room for the largest map in the widest sample type (64 bits), no more.
     let mut limits = Limits::default();
-    limits.decoding_buffer_size = max_side * max_side * 8;
+    limits.decoding_buffer_size = limit.side * limit.side * 8;
     limits.intermediate_buffer_size = limits.decoding_buffer_size;
     let mut decoder = decoder.with_limits(limits);
     let fraction = |v: f64, max: f64| v / max;
@@ -799,10 +986,70 @@ fn unit_samples(values: &[f64], width: usize, normalize: bool) -> Result<Vec<u16
 /// # Errors
 /// When a file cannot be written.
 pub fn export(scene: &Scene, dir: &Path) -> Result<PathBuf, String> {
-    use std::fmt::Write as _;
-    let name = scene.name;
+    export_as(scene, scene.name, dir)
+}
+
+/// [`export`] with the files named after `name` (`<name>.toml`, `<name>.obj`, ...; with
+/// several objects, `<name>-<k>.obj`, ... per object `k` from 1, written as `[[object]]`
+/// tables with their placement applied).
+///
+/// # Errors
+/// As [`export`].
+pub fn export_as(scene: &Scene, name: &str, dir: &Path) -> Result<PathBuf, String> {
     let io = |path: &Path, e: std::io::Error| format!("{}: {e}", path.display());
     std::fs::create_dir_all(dir).map_err(|e| io(dir, e))?;
+    let several = !scene.others.is_empty();
+    let mut objects = String::new();
+    for (k, object) in scene.objects().enumerate() {
+        let stem = if several {
+            format!("{name}-{}", k + 1)
+        } else {
+            name.to_string()
+        };
+        let (mesh, content) = export_object(object, &stem, dir)?;
+        if several {
+            objects += &format!("[[object]]\n{mesh}[object.{content}\n");
+        } else {
+            objects += &format!("[mesh]\n{mesh}\n[{content}");
+        }
+    }
+    let c = &scene.camera;
+    let animation = match &scene.motion {
+        Motion::Deform {
+            deformation,
+            amplitude,
+        } => format!(
+            "\n[animation]\ndeformation = \"{}\"\namplitude = {amplitude}\n",
+            deformation.name()
+        ),
+        // Poses read from files are not written back; a static scene has none.
+        Motion::Frames(_) | Motion::Static => String::new(),
+    };
+    let toml = format!(
+        "# The scene '{name}', exported by `nlrt export`.\n\n{objects}{animation}\n[camera]\neye = [{}, {}, {}]\ntarget = [{}, {}, {}]\nfov_degrees = {}\nsun = [{}, {}, {}]\n",
+        c.eye.x,
+        c.eye.y,
+        c.eye.z,
+        c.target.x,
+        c.target.y,
+        c.target.z,
+        c.fov_degrees,
+        scene.sun.x,
+        scene.sun.y,
+        scene.sun.z
+    );
+    let path = dir.join(format!("{name}.toml"));
+    std::fs::write(&path, toml).map_err(|e| io(&path, e))?;
+    Ok(path)
+}
+
+/// Writes one object's base mesh (`<stem>.obj`) and map (`<stem>-height.png`) or tile object
+/// (`<stem>-object.obj`); returns its mesh keys (`obj`, `material`) and its content table
+/// without the opening bracket (`displacement]\n...` or `shell]\n...`).
+fn export_object(object: &Scene, stem: &str, dir: &Path) -> Result<(String, String), String> {
+    use std::fmt::Write as _;
+    let scene = object;
+    let io = |path: &Path, e: std::io::Error| format!("{}: {e}", path.display());
     let mut obj = String::from("# exported by nlrt\n");
     for p in &scene.positions {
         let _ = writeln!(obj, "v {:.9} {:.9} {:.9}", p.x, p.y, p.z);
@@ -817,11 +1064,11 @@ pub fn export(scene: &Scene, dir: &Path) -> Result<PathBuf, String> {
         let [a, b, c] = t.map(|i| i + 1);
         let _ = writeln!(obj, "f {a}/{a}/{a} {b}/{b}/{b} {c}/{c}/{c}");
     }
-    let mesh_path = dir.join(format!("{name}.obj"));
+    let mesh_path = dir.join(format!("{stem}.obj"));
     std::fs::write(&mesh_path, obj).map_err(|e| io(&mesh_path, e))?;
     let content = match &scene.content {
         Content::Displacement(field) => {
-            let path = dir.join(format!("{name}-height.png"));
+            let path = dir.join(format!("{stem}-height.png"));
             let file = std::fs::File::create(&path).map_err(|e| io(&path, e))?;
             let (width, height) = (field.width() as u32, field.height() as u32);
             let mut encoder = png::Encoder::new(std::io::BufWriter::new(file), width, height);
@@ -837,7 +1084,7 @@ pub fn export(scene: &Scene, dir: &Path) -> Result<PathBuf, String> {
                 .and_then(|mut w| w.write_image_data(&bytes))
                 .map_err(|e| format!("{}: {e}", path.display()))?;
             format!(
-                "[displacement]\nheight_map = \"{name}-height.png\"\nheight_scale = {}\ntiling = {}\nmidlevel = {}\n{}",
+                "displacement]\nheight_map = \"{stem}-height.png\"\nheight_scale = {}\ntiling = {}\nmidlevel = {}\n{}",
                 scene.height_scale,
                 scene.tiling,
                 scene.midlevel,
@@ -849,7 +1096,7 @@ pub fn export(scene: &Scene, dir: &Path) -> Result<PathBuf, String> {
             )
         }
         Content::Shell(object) => {
-            let path = dir.join(format!("{name}-object.obj"));
+            let path = dir.join(format!("{stem}-object.obj"));
             let mut text = String::from("# (u, v, h) in the unit tile, exported by nlrt\n");
             for t in object {
                 for p in t {
@@ -861,41 +1108,14 @@ pub fn export(scene: &Scene, dir: &Path) -> Result<PathBuf, String> {
             }
             std::fs::write(&path, text).map_err(|e| io(&path, e))?;
             format!(
-                "[shell]\nobject = \"{name}-object.obj\"\nheight_scale = {}\ntiling = {}\n",
+                "shell]\nobject = \"{stem}-object.obj\"\nheight_scale = {}\ntiling = {}\n",
                 scene.height_scale, scene.tiling
             )
         }
     };
-    let c = &scene.camera;
     let material = match scene.material {
         Material::Diffuse => "",
         Material::Glossy { .. } => "material = \"glossy\"\n",
     };
-    let animation = match &scene.motion {
-        Motion::Deform {
-            deformation,
-            amplitude,
-        } => format!(
-            "\n[animation]\ndeformation = \"{}\"\namplitude = {amplitude}\n",
-            deformation.name()
-        ),
-        // Poses read from files are not written back; a static scene has none.
-        Motion::Frames(_) | Motion::Static => String::new(),
-    };
-    let toml = format!(
-        "# The built-in scene '{name}', exported by `nlrt export {name}`.\n\n[mesh]\nobj = \"{name}.obj\"\n{material}\n{content}{animation}\n[camera]\neye = [{}, {}, {}]\ntarget = [{}, {}, {}]\nfov_degrees = {}\nsun = [{}, {}, {}]\n",
-        c.eye.x,
-        c.eye.y,
-        c.eye.z,
-        c.target.x,
-        c.target.y,
-        c.target.z,
-        c.fov_degrees,
-        scene.sun.x,
-        scene.sun.y,
-        scene.sun.z
-    );
-    let path = dir.join(format!("{name}.toml"));
-    std::fs::write(&path, toml).map_err(|e| io(&path, e))?;
-    Ok(path)
+    Ok((format!("obj = \"{stem}.obj\"\n{material}"), content))
 }

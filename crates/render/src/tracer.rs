@@ -53,3 +53,23 @@ pub trait Tracer: Sync {
     /// Bytes of acceleration data.
     fn memory_bytes(&self) -> usize;
 }
+
+impl<Tr: Tracer + ?Sized> Tracer for &Tr {
+    fn intersect(&self, origin: DVec3, dir: DVec3, t_min: f64, t_max: f64) -> Option<TraceHit> {
+        (**self).intersect(origin, dir, t_min, t_max)
+    }
+
+    fn memory_bytes(&self) -> usize {
+        (**self).memory_bytes()
+    }
+}
+
+impl<Tr: Tracer + ?Sized> Tracer for Box<Tr> {
+    fn intersect(&self, origin: DVec3, dir: DVec3, t_min: f64, t_max: f64) -> Option<TraceHit> {
+        (**self).intersect(origin, dir, t_min, t_max)
+    }
+
+    fn memory_bytes(&self) -> usize {
+        (**self).memory_bytes()
+    }
+}

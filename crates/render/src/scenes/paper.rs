@@ -40,6 +40,7 @@ pub fn mountain(side: usize) -> Scene {
         material: Material::Diffuse,
         motion: Motion::deform(Deformation::Wave),
         seam_rule: SeamRule::Closed,
+        others: Vec::new(),
         midlevel: 0.0,
     }
 }
@@ -108,6 +109,7 @@ pub fn cylinder(side: usize) -> Scene {
         material: Material::Diffuse,
         motion: Motion::deform(Deformation::Bend),
         seam_rule: SeamRule::Closed,
+        others: Vec::new(),
         midlevel: 0.0,
     }
 }
@@ -203,6 +205,7 @@ pub(super) fn shell_torus(
         material,
         motion: Motion::deform(Deformation::Breathe),
         seam_rule: SeamRule::Closed,
+        others: Vec::new(),
         midlevel: 0.0,
     }
 }
@@ -294,6 +297,7 @@ pub fn cornell(n: usize) -> Scene {
         material: Material::Diffuse,
         motion: Motion::deform(Deformation::Squash),
         seam_rule: SeamRule::Closed,
+        others: Vec::new(),
         midlevel: 0.0,
     }
 }
@@ -322,6 +326,7 @@ pub fn torus_scene(side: usize) -> Scene {
         material: Material::Diffuse,
         motion: Motion::deform(Deformation::Breathe),
         seam_rule: SeamRule::Closed,
+        others: Vec::new(),
         midlevel: 0.0,
     }
 }
@@ -416,6 +421,7 @@ pub fn fig9() -> Scene {
         material: Material::Diffuse,
         motion: Motion::deform(Deformation::Twist),
         seam_rule: SeamRule::Closed,
+        others: Vec::new(),
         midlevel: 0.0,
     }
 }
@@ -542,6 +548,7 @@ pub fn fur_cones(side: usize) -> Scene {
         material: Material::Diffuse,
         motion: Motion::deform(Deformation::Breathe),
         seam_rule: SeamRule::Closed,
+        others: Vec::new(),
         midlevel: 0.0,
     }
 }

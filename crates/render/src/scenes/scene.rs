@@ -41,6 +41,12 @@ pub struct Scene {
     /// How uv and normal seams of the base mesh are treated by displacement methods and the
     /// pre-tessellated reference ([`SeamRule::Closed`] unless `--no-seam-fix`).
     pub seam_rule: SeamRule,
+    /// The scene's second and later objects (a scene file of several `[[object]]` tables),
+    /// each a one-object scene with this one's camera, sun, motion and seam rule and no
+    /// `others` of its own; empty for every built-in scene. The fields above are the first
+    /// object. Methods build each object's own tracer and trace them as one
+    /// ([`crate::objects::ObjectUnion`]); see [`Scene::objects`].
+    pub others: Vec<Scene>,
 }
 
 /// What fills a scene's shell.
@@ -97,6 +103,71 @@ impl Camera {
 }
 
 impl Scene {
+    /// Every object of the scene, the first (this scene's own fields) first. Each is traced
+    /// as a one-object scene: what is built from an object never looks at its `others`.
+    pub fn objects(&self) -> impl Iterator<Item = &Scene> {
+        core::iter::once(self).chain(self.others.iter())
+    }
+
+    /// How many objects the scene has (1 for every built-in scene).
+    #[must_use]
+    pub fn object_count(&self) -> usize {
+        1 + self.others.len()
+    }
+
+    /// The object whose base triangles carry hit id `id` (ids run through the objects in
+    /// order, [`crate::objects::ObjectUnion`]) and the id within it; `None` past the last.
+    #[must_use]
+    pub fn object_of(&self, id: u32) -> Option<(&Scene, u32)> {
+        let mut first = 0u64;
+        for object in self.objects() {
+            let count = object.triangles.len() as u64;
+            if u64::from(id) < first + count {
+                return Some((object, (u64::from(id) - first) as u32));
+            }
+            first += count;
+        }
+        None
+    }
+
+    /// The material at hit id `id` (the material of the object it belongs to).
+    #[must_use]
+    pub fn material_of(&self, id: u32) -> Material {
+        self.object_of(id)
+            .map_or(self.material, |(o, _)| o.material)
+    }
+
+    /// Sets the seam rule of every object.
+    pub fn set_seam_rule(&mut self, rule: SeamRule) {
+        self.seam_rule = rule;
+        for other in &mut self.others {
+            other.seam_rule = rule;
+        }
+    }
+
+    /// Sets the motion of every object (a deformation moves each object's base mesh by the
+    /// same function of world position).
+    pub fn set_motion(&mut self, motion: Motion) {
+        for other in &mut self.others {
+            other.motion = motion.clone();
+        }
+        self.motion = motion;
+    }
+
+    /// Every object's content, one line (`"1024^2 height map"`, or the objects' joined by
+    /// `" + "`).
+    #[must_use]
+    pub fn describe_content(&self) -> String {
+        let parts: Vec<String> = self.objects().map(|o| o.content.describe()).collect();
+        parts.join(" + ")
+    }
+
+    /// Base triangles over every object.
+    #[must_use]
+    pub fn triangle_count(&self) -> usize {
+        self.objects().map(|o| o.triangles.len()).sum()
+    }
+
     /// Why this scene cannot be set up for nonlinear tracing (and every method built on the
     /// same prisms) in precision `T`, or `Ok`: a mesh value, the height scale or the tiling
     /// that is finite in f64 but not in `T`, or texture coordinates that, times the tiling
@@ -106,10 +177,20 @@ impl Scene {
     /// # Errors
     /// The message names the value and the precision.
     pub fn check_precision<T: nlrt_poly::Real>(&self) -> Result<(), String> {
-        match &self.content {
-            Content::Displacement(_) => self.displaced_surface::<T>().map(|_| ()),
-            Content::Shell(_) => self.shell_surface::<T>().map(|_| ()),
+        for (k, object) in self.objects().enumerate() {
+            match &object.content {
+                Content::Displacement(_) => object.displaced_surface::<T>().map(|_| ()),
+                Content::Shell(_) => object.shell_surface::<T>().map(|_| ()),
+            }
+            .map_err(|e| {
+                if self.others.is_empty() {
+                    e
+                } else {
+                    format!("object {}: {e}", k + 1)
+                }
+            })?;
         }
+        Ok(())
     }
 
     /// The height scale and tiling in precision `T`, or which of them is finite in f64 but
@@ -148,9 +229,24 @@ impl Scene {
     }
 
     /// One line on the seams for progress output: `""` without seams, else their counts and
-    /// whether they are closed.
+    /// whether they are closed (per object, for a scene of several).
     #[must_use]
     pub fn describe_seams(&self) -> String {
+        if self.others.is_empty() {
+            return self.describe_own_seams();
+        }
+        self.objects()
+            .enumerate()
+            .filter_map(|(k, object)| {
+                let seams = object.describe_own_seams();
+                (!seams.is_empty())
+                    .then(|| format!(", object {}: {}", k + 1, seams.trim_start_matches(", ")))
+            })
+            .collect()
+    }
+
+    /// [`Scene::describe_seams`] of this object alone.
+    fn describe_own_seams(&self) -> String {
         match self.seams() {
             Some(seams) if !seams.edges().is_empty() => format!(
                 ", {} seam edges ({} uv, {} normal{}; {})",
@@ -262,6 +358,23 @@ impl Scene {
         scene.positions.clone_from(&pose.positions);
         scene.normals.clone_from(&pose.normals);
         scene.motion = Motion::Static;
+        Ok(scene)
+    }
+
+    /// Every object moved to frame `frame` of `frames` by its motion (and no motion of its
+    /// own): [`Scene::posed`] of each object's [`Scene::pose`].
+    ///
+    /// # Errors
+    /// A static object, or a pose with another vertex count than its mesh.
+    pub fn posed_at(&self, frame: usize, frames: usize) -> Result<Scene, String> {
+        let posed = |object: &Scene| {
+            let pose = object
+                .pose(frame, frames)
+                .ok_or_else(|| format!("scene '{}' has no motion", object.name))?;
+            object.posed(&pose)
+        };
+        let mut scene = posed(self)?;
+        scene.others = self.others.iter().map(posed).collect::<Result<_, _>>()?;
         Ok(scene)
     }
 

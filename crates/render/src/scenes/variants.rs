@@ -309,6 +309,7 @@ pub fn seam_cube(side: usize) -> Scene {
         material: Material::Diffuse,
         motion: Motion::deform(Deformation::Squash),
         seam_rule: SeamRule::Closed,
+        others: Vec::new(),
         midlevel: 0.0,
     }
 }
@@ -351,6 +352,7 @@ pub fn seam_sphere(side: usize) -> Scene {
         material: Material::Diffuse,
         motion: Motion::deform(Deformation::Breathe),
         seam_rule: SeamRule::Closed,
+        others: Vec::new(),
         midlevel: 0.0,
     }
 }
