@@ -731,8 +731,8 @@ pub const FUZZ_MAX_MAP_SIDE: usize = 256;
 /// renders a 4 x 4 image with one bounce, every pixel finite. Returns whether it loaded.
 pub fn fuzz_scene_file(data: &[u8]) -> bool {
     use nlrt_render::integrator::{RenderOptions, render};
+    use nlrt_render::method::Method;
     use nlrt_render::scene_file::{Source, load_from};
-    use nlrt_render::tracers::Nonlinear;
     use std::cell::RefCell;
     use std::path::Path;
     let mut parts = data.splitn(3, |&b| b == 0);
@@ -770,15 +770,17 @@ pub fn fuzz_scene_file(data: &[u8]) -> bool {
         spp: 1,
         bounces: 1,
     };
+    // Every object (a file of `[[object]]` tables) traced as one.
+    let nonlinear = |method: Method| method.build(&scene).expect("every scene supports it");
     let frames = [
         scene
             .check_precision::<f64>()
             .is_ok()
-            .then(|| render(&scene, &Nonlinear::<f64>::new(&scene), &opts, &|_| {})),
+            .then(|| render(&scene, &nonlinear(Method::NonlinearF64), &opts, &|_| {})),
         scene
             .check_precision::<f32>()
             .is_ok()
-            .then(|| render(&scene, &Nonlinear::<f32>::new(&scene), &opts, &|_| {})),
+            .then(|| render(&scene, &nonlinear(Method::NonlinearF32), &opts, &|_| {})),
     ];
     for frame in frames.iter().flatten() {
         assert!(

@@ -189,7 +189,14 @@ fn replay_scene_file() {
 #[test]
 fn scene_file_seeds_load() {
     let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../fuzz/corpus/scene_file");
-    for name in ["seed-png16", "seed-exr", "seed-png8", "seed-shell"] {
+    for name in [
+        "seed-png16",
+        "seed-exr",
+        "seed-png8",
+        "seed-shell",
+        "seed-object-displacement",
+        "seed-object-shell",
+    ] {
         let data = std::fs::read(dir.join(name)).expect("committed seed");
         assert!(nlrt_tests::fuzz_input::fuzz_scene_file(&data), "{name}");
     }
@@ -198,7 +205,8 @@ fn scene_file_seeds_load() {
 /// Writes the scene-file target's seeds (run once by hand:
 /// `cargo test -p nlrt-tests --test fuzz_replay -- --ignored write_scene_file_seeds`): the
 /// example scene with its PNG map, with the map as an 8 x 8 EXR, with an 8-bit 4 x 4 PNG,
-/// and a shell-mapped quad; each as TOML, 0, base OBJ, 0, third file.
+/// a shell-mapped quad, and each of the two as an `[[object]]` table (placed; the shell with a
+/// deformation); each as TOML, 0, base OBJ, 0, third file.
 #[test]
 #[ignore]
 fn write_scene_file_seeds() {
@@ -253,6 +261,21 @@ fn write_scene_file_seeds() {
         "seed-shell",
         shell,
         b"v 0.1 0.1 0.2\nv 0.9 0.1 0.5\nv 0.5 0.9 0.9\nf 1 2 3\n",
+    );
+    let camera = "[camera]\neye = [0.0, 1.4, 2.4]\ntarget = [0.0, 0.3, -0.5]\n";
+    seed(
+        "seed-object-displacement",
+        &format!(
+            "[[object]]\nobj = \"quad.obj\"\ntranslate = [0.5, 0.0, -1.0]\nscale = 2.0\n[object.displacement]\nheight_map = \"bumps.png\"\nheight_scale = 0.2\nmidlevel = 0.5\n{camera}"
+        ),
+        &std::fs::read(root.join("scenes/bumps.png")).unwrap(),
+    );
+    seed(
+        "seed-object-shell",
+        &format!(
+            "[[object]]\nobj = \"quad.obj\"\nmaterial = \"glossy\"\n[object.shell]\nobject = \"brick.obj\"\nheight_scale = 0.08\ntiling = 3.0\n[animation]\ndeformation = \"wave\"\n{camera}"
+        ),
+        &std::fs::read(root.join("scenes/brick.obj")).unwrap(),
     );
 }
 

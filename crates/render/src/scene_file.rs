@@ -266,9 +266,10 @@ pub fn load_from(path: &Path, source: &Source<'_>) -> Result<Scene, String> {
     let label = path.display().to_string();
     for (k, section) in sections.into_iter().enumerate() {
         let object = load_object(&label, dir, source, &mut limit, section);
+        // Every message begins with a file's path: the scene file's, for an object's.
         objects.push(object.map_err(|e| {
             if several {
-                format!("object {}: {e}", k + 1)
+                format!("{label}: object {}: {e}", k + 1)
             } else {
                 e
             }
