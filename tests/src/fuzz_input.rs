@@ -730,9 +730,9 @@ pub const FUZZ_MAX_MAP_SIDE: usize = 256;
 /// is built for nonlinear tracing in each precision it passes the precision check for and
 /// renders a 4 x 4 image with one bounce, every pixel finite. Returns whether it loaded.
 pub fn fuzz_scene_file(data: &[u8]) -> bool {
-    use nlrt_render::integrator::{RenderOptions, render};
-    use nlrt_render::method::Method;
-    use nlrt_render::scene_file::{Source, load_from};
+    use nlrt_render::scene::scene_file::{Source, load_from};
+    use nlrt_render::trace::integrator::{RenderOptions, render};
+    use nlrt_render::trace::method::Method;
     use std::cell::RefCell;
     use std::path::Path;
     let mut parts = data.splitn(3, |&b| b == 0);

@@ -14,8 +14,8 @@ use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_m
 use nlrt_accel::{BaseMesh, DisplacedSurface, HeightField, TraversalStats, Wrap};
 use nlrt_poly::glam::{DVec2, DVec3};
 use nlrt_poly::{Real, Vector3};
-use nlrt_render::scenes::{self, Scene, Size};
-use nlrt_render::tracers::Nonlinear;
+use nlrt_render::scene::scenes::{self, Scene, Size};
+use nlrt_render::trace::methods::Nonlinear;
 use nlrt_shellmap::Ray;
 use std::hint::black_box;
 

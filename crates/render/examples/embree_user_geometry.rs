@@ -8,11 +8,11 @@
 use std::time::Instant;
 
 use nlrt_poly::glam::DVec3;
-use nlrt_render::embree_reference::{EmbreeTriangles, Isa};
-use nlrt_render::embree_user::{EmbreeWithSurface, SURFACE_ID};
-use nlrt_render::scenes::{Size, builtin};
-use nlrt_render::tessellate::Tessellated;
-use nlrt_render::tracer::Tracer;
+use nlrt_render::scene::scenes::{Size, builtin};
+use nlrt_render::trace::embree_reference::{EmbreeTriangles, Isa};
+use nlrt_render::trace::embree_user::{EmbreeWithSurface, SURFACE_ID};
+use nlrt_render::trace::tessellate::Tessellated;
+use nlrt_render::trace::tracer::Tracer;
 use rayon::prelude::*;
 
 fn main() {

@@ -14,9 +14,9 @@
 
 use nlrt_accel::TraversalStats;
 use nlrt_poly::{Real, Vector3};
-use nlrt_render::integrator::{RenderOptions, render_recording};
-use nlrt_render::ray_stream::{RayKind, StreamRay};
-use nlrt_render::tracers::Nonlinear;
+use nlrt_render::trace::integrator::{RenderOptions, render_recording};
+use nlrt_render::trace::methods::Nonlinear;
+use nlrt_render::trace::ray_stream::{RayKind, StreamRay};
 use nlrt_shellmap::Ray;
 use std::time::Instant;
 

@@ -12,8 +12,8 @@
 
 use nlrt_accel::TraversalStats;
 use nlrt_poly::{Real, Vector3};
-use nlrt_render::scenes::Scene;
-use nlrt_render::tracers::Nonlinear;
+use nlrt_render::scene::scenes::Scene;
+use nlrt_render::trace::methods::Nonlinear;
 use nlrt_shellmap::Ray;
 
 mod common;

@@ -4,10 +4,10 @@
 //! with exit code 2 and one message.
 
 use nlrt_accel::TlasUpdate;
-use nlrt_render::animate::{self, AnimateOptions};
-use nlrt_render::integrator::RenderOptions;
-use nlrt_render::method::Method;
-use nlrt_render::scenes::{self, SCENE_NAMES, Size};
+use nlrt_render::lab::animate::{self, AnimateOptions};
+use nlrt_render::scene::scenes::{self, SCENE_NAMES, Size};
+use nlrt_render::trace::integrator::RenderOptions;
+use nlrt_render::trace::method::Method;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -230,7 +230,7 @@ fn scene_files_animate_a_sequence_of_obj_poses() {
         format!("{text}\n[animation]\nframes = [\"pose_0.obj\", \"pose_1.obj\", \"pose_2.obj\"]\n"),
     )
     .unwrap();
-    let scene = nlrt_render::scene_file::load(&dir.join("bumps.toml")).unwrap();
+    let scene = nlrt_render::scene::scene_file::load(&dir.join("bumps.toml")).unwrap();
     assert_eq!(scene.motion.describe(), "3 poses from OBJ files");
     let pose = scene.pose(2, 3).unwrap();
     assert!((pose.positions.iter().map(|p| p.y).fold(0.0, f64::max) - 0.4).abs() < 1e-6);
@@ -252,7 +252,7 @@ fn scene_files_animate_a_sequence_of_obj_poses() {
     assert!(err.contains("0 pixels differ"), "{err}");
     // A pose with another topology is refused, naming its file.
     write_pose(&dir, "pose_1.obj", 0.1, true);
-    let e = nlrt_render::scene_file::load(&dir.join("bumps.toml")).unwrap_err();
+    let e = nlrt_render::scene::scene_file::load(&dir.join("bumps.toml")).unwrap_err();
     assert!(e.contains("pose_1.obj") && e.contains("triangles"), "{e}");
     // Frames and a deformation together, or an unknown deformation, are refused too.
     std::fs::write(
@@ -260,14 +260,14 @@ fn scene_files_animate_a_sequence_of_obj_poses() {
         format!("{text}\n[animation]\nframes = [\"pose_0.obj\"]\ndeformation = \"bend\"\n"),
     )
     .unwrap();
-    let e = nlrt_render::scene_file::load(&dir.join("bumps.toml")).unwrap_err();
+    let e = nlrt_render::scene::scene_file::load(&dir.join("bumps.toml")).unwrap_err();
     assert!(e.contains("exactly one of frames and deformation"), "{e}");
     std::fs::write(
         dir.join("bumps.toml"),
         format!("{text}\n[animation]\ndeformation = \"bend\"\namplitude = 1e9\n"),
     )
     .unwrap();
-    let e = nlrt_render::scene_file::load(&dir.join("bumps.toml")).unwrap_err();
+    let e = nlrt_render::scene::scene_file::load(&dir.join("bumps.toml")).unwrap_err();
     assert!(e.contains("amplitude = 1000000000 is out of range"), "{e}");
 }
 
@@ -276,9 +276,10 @@ fn scene_files_animate_a_sequence_of_obj_poses() {
 fn exported_scenes_keep_their_motion() {
     let dir = std::env::temp_dir().join(format!("nlrt-animate-export-{}", std::process::id()));
     let scene = scenes::builtin("cylinder", Size::Small).unwrap();
-    let loaded =
-        nlrt_render::scene_file::load(&nlrt_render::scene_file::export(&scene, &dir).unwrap())
-            .unwrap();
+    let loaded = nlrt_render::scene::scene_file::load(
+        &nlrt_render::scene::scene_file::export(&scene, &dir).unwrap(),
+    )
+    .unwrap();
     assert_eq!(loaded.motion.describe(), scene.motion.describe());
     std::fs::remove_dir_all(&dir).unwrap();
 }

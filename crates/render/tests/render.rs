@@ -1,12 +1,12 @@
 //! The renderer and the report on reduced scenes: methods agree where they must, and the
 //! CLI fails cleanly.
 
-use nlrt_render::integrator::{RenderOptions, render};
-use nlrt_render::method::Method;
-use nlrt_render::report::compare;
-use nlrt_render::scenes;
-use nlrt_render::tessellate::Tessellated;
-use nlrt_render::tracers::Nonlinear;
+use nlrt_render::lab::report::compare;
+use nlrt_render::scene::scenes;
+use nlrt_render::trace::integrator::{RenderOptions, render};
+use nlrt_render::trace::method::Method;
+use nlrt_render::trace::methods::Nonlinear;
+use nlrt_render::trace::tessellate::Tessellated;
 use std::process::Command;
 
 fn small() -> RenderOptions {
@@ -102,7 +102,7 @@ fn nlrt(args: &[&str]) -> std::process::Output {
 /// variants the code knows (the list is built from them, so a new scene cannot be missed).
 #[test]
 fn help_lists_every_built_in_scene() {
-    use nlrt_render::scenes::{SCENE_NAMES, VARIANT_NAMES};
+    use nlrt_render::scene::scenes::{SCENE_NAMES, VARIANT_NAMES};
     for command in ["render", "bench", "export"] {
         let out = nlrt(&[command, "--help"]);
         assert!(out.status.success(), "{command} --help");
@@ -185,7 +185,7 @@ fn render_writes_a_png() {
 /// f64 and in f32, decided by exact arithmetic (the rays are fixed, so this is repeatable).
 #[test]
 fn torus_is_watertight() {
-    use nlrt_render::watertight::measure;
+    use nlrt_render::lab::watertight::measure;
     let scene = scenes::torus_scene(64);
     for report in [
         measure(&scene, 256, Method::NonlinearF64).unwrap(),
@@ -214,7 +214,7 @@ fn torus_is_watertight() {
         assert!(d.samples > 500 && d.unverified == 0, "{d:?}");
         assert!(d.p99 < bound, "{}: {d:?}", report.method);
         assert!(
-            d.max < nlrt_render::watertight::LEAK_TOLERANCE,
+            d.max < nlrt_render::lab::watertight::LEAK_TOLERANCE,
             "{}: {d:?}",
             report.method
         );
@@ -226,7 +226,7 @@ fn torus_is_watertight() {
 #[test]
 fn mountain_at_grazing_angles_is_watertight() {
     use nlrt_poly::glam::DVec3;
-    use nlrt_render::watertight::measure;
+    use nlrt_render::lab::watertight::measure;
     let mut scene = scenes::mountain(128);
     scene.camera.eye = DVec3::new(0.0, 0.4, 0.95);
     scene.camera.target = DVec3::new(0.0, 0.25, -1.0);
@@ -297,7 +297,7 @@ fn fig9_degenerate_columns_render_alike_in_both_precisions() {
 
 #[test]
 fn partial_pyramid_updates_after_brush_strokes_trace_like_a_fresh_build() {
-    use nlrt_render::edit::{EditOptions, run};
+    use nlrt_render::lab::edit::{EditOptions, run};
     let report = run(&EditOptions {
         strokes: 60,
         brush: 96,
@@ -325,7 +325,7 @@ fn partial_pyramid_updates_after_brush_strokes_trace_like_a_fresh_build() {
 #[test]
 fn seams_are_closed_by_the_rule_and_leak_without_it() {
     use nlrt_accel::SeamRule;
-    use nlrt_render::watertight::measure;
+    use nlrt_render::lab::watertight::measure;
     for name in scenes::SEAM_SCENES {
         let mut scene = scenes::builtin(name, scenes::Size::Small).unwrap();
         for method in [Method::NonlinearF32, Method::NonlinearF64] {
@@ -400,7 +400,8 @@ fn a_ray_touching_the_base_at_a_zero_texel_edge_hits_there() {
         .expect("the ray meets the surface");
     let t_base = 2.356_940_664_401_393_7;
     assert!(
-        (f64::from(hit.hit.t) - t_base).abs() < nlrt_render::watertight::LEAK_TOLERANCE * t_base,
+        (f64::from(hit.hit.t) - t_base).abs()
+            < nlrt_render::lab::watertight::LEAK_TOLERANCE * t_base,
         "{hit:?}"
     );
     assert_eq!(hit.triangle, 1168, "{hit:?}");
@@ -413,7 +414,7 @@ fn fig9_displaced_columns_nonlinear_is_watertight_tessellation_free_leaks_where_
     // point in uv on its own vertices (a uv seam, closed by a seam wall for nonlinear
     // tracing); column 6's second triangle is a line in world, which
     // has no surface (as in the paper), so its neighbour's edge with it is open.
-    use nlrt_render::watertight::measure;
+    use nlrt_render::lab::watertight::measure;
     let scene = scenes::builtin("fig9-displaced", scenes::Size::Small).unwrap();
     for method in [Method::NonlinearF32, Method::NonlinearF64] {
         let report = measure(&scene, 256, method).unwrap();
@@ -548,7 +549,7 @@ fn curved_shell_mapping_agrees_with_its_own_reference() {
 #[test]
 fn cone_tracing_silhouette_correction_cuts_the_mismatches_on_the_cylinder() {
     use nlrt_baselines::Rectification;
-    use nlrt_render::tracers::ConeTracer;
+    use nlrt_render::trace::methods::ConeTracer;
     let scene = scenes::cylinder(128);
     let opts = RenderOptions {
         width: 160,
@@ -580,7 +581,7 @@ fn cone_tracing_silhouette_correction_cuts_the_mismatches_on_the_cylinder() {
 #[cfg(feature = "embree")]
 #[test]
 fn embree_traces_the_reference_triangles() {
-    use nlrt_render::embree_reference::{EmbreeTessellated, Isa};
+    use nlrt_render::trace::embree_reference::{EmbreeTessellated, Isa};
     for scene in [scenes::mountain(128), scenes::cornell(4)] {
         let reference = render(&scene, &Tessellated::new(&scene), &small(), &|_| {});
         for isa in [Isa::Build, Isa::Native] {
@@ -617,7 +618,7 @@ fn watertight_with_an_unjudged_method_says_why() {
 /// method the report it gets alone, in the order asked for.
 #[test]
 fn measuring_methods_together_equals_measuring_them_alone() {
-    use nlrt_render::watertight::{JudgedHits, measure, measure_all};
+    use nlrt_render::lab::watertight::{JudgedHits, measure, measure_all};
     let scene = scenes::torus_scene(64);
     let methods = [
         Method::NonlinearF32,
@@ -662,7 +663,7 @@ fn measuring_methods_together_equals_measuring_them_alone() {
 /// other kinds (docs/watertightness.md: at most 9 of 231,488 hits at 262,144 rays).
 #[test]
 fn ghost_tori_hits_are_judged_by_the_oracle() {
-    use nlrt_render::watertight::measure;
+    use nlrt_render::lab::watertight::measure;
     for name in scenes::GHOST_SCENES {
         let scene = scenes::builtin(name, scenes::Size::Small).unwrap();
         for method in [Method::NonlinearF64, Method::NonlinearF32] {
@@ -843,8 +844,8 @@ fn bench_rounds_interleave_the_stream_replays() {
 /// every ray hits as often on one thread as on all.
 #[test]
 fn a_replayed_ray_stream_gives_the_recording_renders_hits() {
-    use nlrt_render::integrator::render_recording;
-    use nlrt_render::ray_stream::{RayKind, replay};
+    use nlrt_render::trace::integrator::render_recording;
+    use nlrt_render::trace::ray_stream::{RayKind, replay};
     let scene = scenes::builtin("torus", scenes::Size::Small).unwrap();
     let tracer = Nonlinear::<f64>::new(&scene);
     let opts = RenderOptions {
@@ -883,7 +884,7 @@ fn a_replayed_ray_stream_gives_the_recording_renders_hits() {
 #[test]
 fn the_scales_close_along_a_tile_boundary() {
     use nlrt_poly::glam::DVec3;
-    use nlrt_render::tracer::Tracer;
+    use nlrt_render::trace::tracer::Tracer;
     let scene = scenes::builtin("scales", scenes::Size::Small).unwrap();
     let tracers: [(&str, Box<dyn Tracer>, &[f64]); 3] = [
         (

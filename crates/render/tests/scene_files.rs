@@ -166,11 +166,11 @@ fn unsupported_height_maps_are_rejected() {
 /// geometry, a few 1e-7 relative; 1e-4 leaves room for the conditioning of grazing hits).
 #[test]
 fn exported_builtin_scenes_render_like_the_originals() {
-    use nlrt_render::integrator::{RenderOptions, render};
-    use nlrt_render::report::compare;
-    use nlrt_render::scene_file::{export, load};
-    use nlrt_render::scenes::{self, Size};
-    use nlrt_render::tracers::Nonlinear;
+    use nlrt_render::lab::report::compare;
+    use nlrt_render::scene::scene_file::{export, load};
+    use nlrt_render::scene::scenes::{self, Size};
+    use nlrt_render::trace::integrator::{RenderOptions, render};
+    use nlrt_render::trace::methods::Nonlinear;
     let dir = std::env::temp_dir().join(format!("nlrt-export-{}", std::process::id()));
     let opts = RenderOptions {
         width: 48,

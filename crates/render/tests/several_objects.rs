@@ -3,10 +3,10 @@
 //! traced as one answer as each object alone; placement and every kind of bad table is one
 //! clear message.
 
-use nlrt_render::method::Method;
-use nlrt_render::scene_file::{self, MAX_OBJECTS, Source};
-use nlrt_render::scenes::{Content, Scene};
-use nlrt_render::tracer::Tracer;
+use nlrt_render::scene::scene_file::{self, MAX_OBJECTS, Source};
+use nlrt_render::scene::scenes::{Content, Scene};
+use nlrt_render::trace::method::Method;
+use nlrt_render::trace::tracer::Tracer;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -120,12 +120,12 @@ fn the_objects_traced_as_one_answer_as_each_alone() {
             let eye = scene.camera.eye;
             let hit = union.intersect(eye, dir, 0.0, f64::INFINITY);
             let on_a = a.intersect(eye, dir, 0.0, f64::INFINITY);
-            let on_b =
-                b.intersect(eye, dir, 0.0, f64::INFINITY)
-                    .map(|h| nlrt_render::tracer::TraceHit {
-                        id: h.id + first_triangles,
-                        ..h
-                    });
+            let on_b = b.intersect(eye, dir, 0.0, f64::INFINITY).map(|h| {
+                nlrt_render::trace::tracer::TraceHit {
+                    id: h.id + first_triangles,
+                    ..h
+                }
+            });
             let expected = match (on_a, on_b) {
                 (Some(p), Some(q)) => Some(if q.t < p.t { q } else { p }),
                 (p, q) => p.or(q),
@@ -238,12 +238,12 @@ fn a_deformation_moves_every_object() {
         "-o",
         out_dir.to_str().unwrap(),
     ]));
-    let report = nlrt_render::animate::run(
+    let report = nlrt_render::lab::animate::run(
         &scene,
-        &nlrt_render::animate::AnimateOptions {
+        &nlrt_render::lab::animate::AnimateOptions {
             frames: 3,
             methods: vec![Method::NonlinearF32, Method::NonlinearF64],
-            render: nlrt_render::integrator::RenderOptions {
+            render: nlrt_render::trace::integrator::RenderOptions {
                 width: 32,
                 height: 24,
                 ..Default::default()
@@ -408,10 +408,10 @@ fn the_example_exports_and_reports() {
 
     let report_dir = dir.join("report");
     std::fs::create_dir_all(&report_dir).unwrap();
-    let opts = nlrt_render::report::ReportOptions {
+    let opts = nlrt_render::lab::report::ReportOptions {
         scenes: vec![file.to_str().unwrap().to_string()],
-        size: nlrt_render::scenes::Size::Small,
-        render: nlrt_render::integrator::RenderOptions {
+        size: nlrt_render::scene::scenes::Size::Small,
+        render: nlrt_render::trace::integrator::RenderOptions {
             width: 32,
             height: 24,
             ..Default::default()
@@ -423,7 +423,7 @@ fn the_example_exports_and_reports() {
         seam_rule: nlrt_accel::SeamRule::Closed,
         rounds: 1,
     };
-    let md = nlrt_render::report::run(&opts).unwrap();
+    let md = nlrt_render::lab::report::run(&opts).unwrap();
     assert!(md.contains("terrain-and-wall-nonlinear-f32.png"), "{md}");
     assert!(
         report_dir

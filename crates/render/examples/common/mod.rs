@@ -1,7 +1,7 @@
 //! Command-line helpers shared by the traversal examples (`traversal_counts`,
 //! `stream_counts`): a built-in scene by name and map size, a width, and the exit-2 message.
 
-use nlrt_render::scenes::{Scene, Size, builtin};
+use nlrt_render::scene::scenes::{Scene, Size, builtin};
 
 /// Prints `program: message` and exits with code 2.
 pub fn fail(program: &str, message: &str) -> ! {

@@ -3,8 +3,8 @@
 
 use super::maps::*;
 use super::scene::*;
-use crate::animation::{Deformation, Motion};
-use crate::material::Material;
+use crate::scene::material::Material;
+use crate::scene::motion::{Deformation, Motion};
 use nlrt_accel::SeamRule;
 use nlrt_poly::glam::{DVec2, DVec3};
 use std::f64::consts::TAU;

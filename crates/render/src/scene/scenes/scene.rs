@@ -1,8 +1,8 @@
 //! The scene type: a base mesh, what fills its shell, the camera, light, material and motion,
 //! and how each precision's surface is built from it.
 
-use crate::animation::{Motion, Pose};
-use crate::material::Material;
+use crate::scene::material::Material;
+use crate::scene::motion::{Motion, Pose};
 use nlrt_accel::{
     BaseMesh, DisplacedSurface, HeightField, SeamRule, ShellObject, ShellSurface, Wrap,
 };
@@ -45,7 +45,7 @@ pub struct Scene {
     /// each a one-object scene with this one's camera, sun, motion and seam rule and no
     /// `others` of its own; empty for every built-in scene. The fields above are the first
     /// object. Methods build each object's own tracer and trace them as one
-    /// ([`crate::objects::ObjectUnion`]); see [`Scene::objects`].
+    /// ([`crate::trace::objects::ObjectUnion`]); see [`Scene::objects`].
     pub others: Vec<Scene>,
 }
 
@@ -116,7 +116,7 @@ impl Scene {
     }
 
     /// The object whose base triangles carry hit id `id` (ids run through the objects in
-    /// order, [`crate::objects::ObjectUnion`]) and the id within it; `None` past the last.
+    /// order, [`crate::trace::objects::ObjectUnion`]) and the id within it; `None` past the last.
     #[must_use]
     pub fn object_of(&self, id: u32) -> Option<(&Scene, u32)> {
         let mut first = 0u64;

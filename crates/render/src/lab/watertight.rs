@@ -22,9 +22,9 @@
 //! A shell-mapped object need not cover the base: shell scenes are judged by rays aimed at
 //! points of the object instead (see the `shell` submodule), for nonlinear tracing.
 
-use crate::method::Method;
-use crate::scenes::{Content, Scene};
-use crate::tracers::Nonlinear;
+use crate::scene::scenes::{Content, Scene};
+use crate::trace::method::Method;
+use crate::trace::methods::Nonlinear;
 use nlrt_accel::{Aabb, Bvh4, SlabRay, TraversalStats, Wrap};
 use nlrt_baselines::{AffineTracing as _, MarchOptions, Marching as _, TetrahedralShells as _};
 use nlrt_oracle::crossing::ray_triangle;
@@ -667,7 +667,7 @@ fn measure_in<T: Real>(
         let marching = matches!(method, Method::MarchingF32 | Method::MarchingF64);
         let tetrahedra = matches!(method, Method::TetrahedraF32 | Method::TetrahedraF64);
         let map = matches!(method, Method::DistanceMapF32 | Method::DistanceMapF64)
-            .then(|| crate::tracers::distance_map_of(surface.field()));
+            .then(|| crate::trace::methods::distance_map_of(surface.field()));
         let verdicts: Vec<Verdict> = (0..n * n)
             .into_par_iter()
             .map(|k| {
@@ -964,7 +964,7 @@ pub fn leak_image(report: &LeakReport) -> Vec<u8> {
 mod tests {
     use super::judge::distance_to_surface;
     use super::*;
-    use crate::scenes::{Size, builtin};
+    use crate::scene::scenes::{Size, builtin};
 
     /// A built-in displacement scene at small size and its `f32` surface.
     fn small_f32_displaced(name: &str) -> (Scene, nlrt_accel::DisplacedSurface<f32>) {
@@ -984,11 +984,11 @@ mod tests {
     /// point at its height.
     #[test]
     fn the_coarse_tori_do_not_leak_in_f32() {
-        let method = crate::method::Method::ALL
+        let method = crate::trace::method::Method::ALL
             .into_iter()
             .find(|m| m.slug() == "nonlinear-f32")
             .expect("a method");
-        for (name, _) in crate::scenes::COARSE_TORI {
+        for (name, _) in crate::scene::scenes::COARSE_TORI {
             let scene = builtin(name, Size::Small).expect("built-in");
             let report = measure(&scene, 96, method).expect("judged");
             assert!(report.decided > 3000, "{name}: {}", report.decided);
@@ -1001,7 +1001,7 @@ mod tests {
     /// and 1% farther too far (the surface is not there; a nearer one is).
     #[test]
     fn the_oracle_judges_moved_hits() {
-        let scene = crate::scenes::torus_scene(64);
+        let scene = crate::scene::scenes::torus_scene(64);
         let tracer = Nonlinear::<f64>::new(&scene);
         let Nonlinear::Displaced(surface) = &tracer else {
             unreachable!("displacement scene")

@@ -6,10 +6,10 @@
 //!
 //! ```no_run
 //! # #[cfg(feature = "embree")] {
-//! use nlrt_render::embree_reference::Isa;
-//! use nlrt_render::embree_user::EmbreeWithSurface;
-//! use nlrt_render::scenes::{builtin, Size};
-//! use nlrt_render::tracer::Tracer;
+//! use nlrt_render::trace::embree_reference::Isa;
+//! use nlrt_render::trace::embree_user::EmbreeWithSurface;
+//! use nlrt_render::scene::scenes::{builtin, Size};
+//! use nlrt_render::trace::tracer::Tracer;
 //! use nlrt_poly::glam::DVec3;
 //! let scene = builtin("mountain", Size::Small).unwrap();
 //! let surface = scene.displaced_surface::<f32>().unwrap();
@@ -29,8 +29,8 @@ use nlrt_shellmap::Ray;
 
 use embree::sys;
 
-use crate::embree_reference::{Isa, MemoryCounter, new_device, triangle_geometry};
-use crate::tracer::{TraceHit, Tracer};
+use crate::trace::embree_reference::{Isa, MemoryCounter, new_device, triangle_geometry};
+use crate::trace::tracer::{TraceHit, Tracer};
 
 /// An Embree scene of ordinary triangles and one nlrt displaced surface as user geometry.
 pub struct EmbreeWithSurface {
@@ -262,7 +262,8 @@ pub const SURFACE_ID: u32 = u32::MAX - 1;
 
 impl Tracer for EmbreeWithSurface {
     fn intersect(&self, origin: DVec3, dir: DVec3, t_min: f64, t_max: f64) -> Option<TraceHit> {
-        let hit = crate::embree_reference::intersect1(self.scene, origin, dir, t_min, t_max)?;
+        let hit =
+            crate::trace::embree_reference::intersect1(self.scene, origin, dir, t_min, t_max)?;
         let id = if hit.geom_id == self.surface_id {
             SURFACE_ID
         } else {

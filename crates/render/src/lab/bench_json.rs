@@ -17,8 +17,10 @@
 //! where the table shows `-`. With `--rounds N` (N >= 2) a row's `rounds` holds every round's
 //! replays and the ratios to the scene's first method (per round, median, smallest, largest).
 
-use crate::ray_stream::Replay;
-use crate::report::{ErrorStats, MethodRun, ReportOptions, RoundRatios, TableRow, round_ratios};
+use crate::lab::report::{
+    ErrorStats, MethodRun, ReportOptions, RoundRatios, TableRow, round_ratios,
+};
+use crate::trace::ray_stream::Replay;
 use serde::Serialize;
 
 /// The commit the binary was built from (`build.rs`; `unknown` outside a git checkout).
@@ -80,7 +82,7 @@ impl ReplayFields {
     }
 }
 
-/// A method's replays of the scene's ray stream ([`crate::report::StreamTimes`]).
+/// A method's replays of the scene's ray stream ([`crate::lab::report::StreamTimes`]).
 #[derive(Clone, Debug, Serialize)]
 pub struct StreamFields {
     /// The primary rays, every thread.
@@ -115,7 +117,7 @@ impl RatioFields {
     }
 }
 
-/// A method's interleaved rounds of the scene's stream ([`crate::report::RoundTimes`]).
+/// A method's interleaved rounds of the scene's stream ([`crate::lab::report::RoundTimes`]).
 #[derive(Clone, Debug, Serialize)]
 pub struct RoundsFields {
     /// The method the ratios are against (the scene's first; its slug).
@@ -332,7 +334,7 @@ pub fn to_json(opts: &ReportOptions, rows: &[TableRow]) -> String {
             arch: std::env::consts::ARCH,
         },
         build: Build {
-            target_features: crate::solvers::target_feature_list(),
+            target_features: crate::lab::solvers::target_feature_list(),
         },
         settings: Settings {
             width: opts.render.width,

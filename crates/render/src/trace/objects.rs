@@ -1,4 +1,4 @@
-//! Scenes of several objects ([`crate::scenes::Scene::others`]) traced as one: each object
+//! Scenes of several objects ([`crate::scene::scenes::Scene::others`]) traced as one: each object
 //! keeps the acceleration data of its own method (a displaced surface's TLAS and min-max
 //! pyramid, a shell's TLAS and object BVH, a tessellation's BVH), and a ray asks them in
 //! turn with its range cut at the nearest hit so far.
@@ -6,19 +6,14 @@
 //! The objects' own top levels are the top level: each begins with its root box, so an
 //! object the ray misses costs one box test. That is a flat list, chosen because an object
 //! of one kind cannot sit in another kind's tree (a displaced prism and a shell prism carry
-//! different leaves); [`MAX_OBJECTS`] keeps the list short enough for it.
+//! different leaves); [`crate::scene::scene_file::MAX_OBJECTS`] keeps the list short enough
+//! for it.
 //!
 //! Hit ids run through the objects in order: object `k`'s base triangle `i` is id `i` plus
-//! the triangles of the objects before it ([`crate::scenes::Scene::object_of`] inverts it).
+//! the triangles of the objects before it ([`crate::scene::scenes::Scene::object_of`] inverts it).
 
-use crate::tracer::{TraceHit, Tracer};
+use crate::trace::tracer::{TraceHit, Tracer};
 use nlrt_poly::glam::DVec3;
-
-/// The most objects a scene may have: a ray tests every object's root box in turn, so a ray
-/// that misses them all costs one box test per object; 256 of them are of the order of one
-/// ray's walk through one surface (tens to hundreds of child tests per ray,
-/// docs/measurements.md), past which a tree over the objects would be the tool.
-pub const MAX_OBJECTS: usize = 256;
 
 /// Several objects' tracers traced as one surface.
 pub struct ObjectUnion<Tr> {
@@ -87,7 +82,7 @@ impl<Tr: Tracer> Tracer for ObjectUnion<Tr> {
 #[cfg(test)]
 mod tests {
     use super::ObjectUnion;
-    use crate::tracer::{TraceHit, Tracer};
+    use crate::trace::tracer::{TraceHit, Tracer};
     use nlrt_poly::glam::DVec3;
 
     /// A plane `x = at` hit from either side, every hit id `id`.

@@ -1,13 +1,13 @@
 //! The tracers behind [`Tracer`]: nonlinear ray tracing (displacement and shell mapping) and
 //! each compared method of `nlrt-baselines`, set up from a [`Scene`] and traced in their
 //! own precision (`f32` or `f64`). The pre-tessellated reference lives in `tessellate`,
-//! geometry images in `resample`, Embree in `embree_reference`; [`crate::method::Method`]
+//! geometry images in `resample`, Embree in `embree_reference`; [`crate::trace::method::Method`]
 //! names them all.
 
-use crate::material::Rng;
-use crate::scenes::{Content, Scene};
-use crate::tessellate::Tessellated;
-use crate::tracer::{TraceHit, Tracer, ray_in};
+use crate::scene::material::Rng;
+use crate::scene::scenes::{Content, Scene};
+use crate::trace::tessellate::Tessellated;
+use crate::trace::tracer::{TraceHit, Tracer, ray_in};
 use nlrt_accel::{DisplacedSurface, HeightField, ShellSurface, TraversalStats};
 use nlrt_baselines::{
     AffineTracing as _, ConeMap, ConeOptions, ConeTraced as _, ConeTracing, DistanceMap,
@@ -50,7 +50,7 @@ impl<T: Real> Nonlinear<T> {
     /// A pose with another vertex count, or a value not finite in `T`.
     pub fn set_pose(
         &mut self,
-        pose: &crate::animation::Pose,
+        pose: &crate::scene::motion::Pose,
         update: nlrt_accel::TlasUpdate,
     ) -> Result<nlrt_accel::PoseUpdate, String> {
         use nlrt_poly::Vector3;

@@ -4,8 +4,8 @@
 //! edges: a texel straddling an edge joins corners of two triangles, which is where the method
 //! differs from the clipped pre-tessellation.
 
-use crate::scenes::{Content, Scene};
-use crate::tracer::{TraceHit, Tracer, ray_in};
+use crate::scene::scenes::{Content, Scene};
+use crate::trace::tracer::{TraceHit, Tracer, ray_in};
 use nlrt_accel::HEIGHT_ONE;
 use nlrt_baselines::GeometryImage;
 use nlrt_poly::glam::{DVec2, DVec3};

@@ -4,8 +4,8 @@
 use super::maps::*;
 use super::paper::*;
 use super::scene::*;
-use crate::animation::{Deformation, Motion};
-use crate::material::Material;
+use crate::scene::material::Material;
+use crate::scene::motion::{Deformation, Motion};
 use nlrt_accel::{HeightField, SeamRule, Wrap};
 use nlrt_poly::glam::{DVec2, DVec3};
 use std::f64::consts::TAU;

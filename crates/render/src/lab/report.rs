@@ -2,12 +2,12 @@
 //! rays), init time, memory, and error against the f64 pre-tessellated reference (hit/miss
 //! mismatches and depth error of the primary rays), with images.
 
-use crate::image::write_png;
-use crate::integrator::{Frame, RenderOptions, render, render_recording};
-use crate::method::Method;
-use crate::ray_stream::{RayKind, RayStream, Replay, replay};
-use crate::scenes::{Scene, Size};
-use crate::tracer::Tracer;
+use crate::scene::scenes::{Scene, Size};
+use crate::trace::image::write_png;
+use crate::trace::integrator::{Frame, RenderOptions, render, render_recording};
+use crate::trace::method::Method;
+use crate::trace::ray_stream::{RayKind, RayStream, Replay, replay};
+use crate::trace::tracer::Tracer;
 use std::fmt::Write as _;
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -141,7 +141,7 @@ fn median_replay(replays: impl Iterator<Item = Replay>) -> Option<Replay> {
     all.get(all.len().saturating_sub(1) / 2).copied()
 }
 
-/// One method's replays of a scene's recorded ray stream ([`crate::ray_stream`]).
+/// One method's replays of a scene's recorded ray stream ([`crate::trace::ray_stream`]).
 #[derive(Clone, Copy, Debug)]
 pub struct StreamTimes {
     /// Every ray, all threads.
@@ -436,7 +436,7 @@ fn difference_image(a: &Frame, b: &Frame) -> Vec<u8> {
 
 /// The speed-against-error figure: one colour per method, one point per scene.
 fn speed_against_error_svg(points: &[(Method, String, f64, ErrorStats)]) -> String {
-    use crate::plot::{Panel, Point, Series};
+    use crate::lab::plot::{Panel, Point, Series};
     let color = |m: Method| match m {
         Method::NonlinearF32 => "#d62728",
         Method::NonlinearF64 => "#ff9896",
@@ -482,7 +482,7 @@ fn speed_against_error_svg(points: &[(Method, String, f64, ErrorStats)]) -> Stri
             })
             .collect()
     };
-    crate::plot::svg(&[
+    crate::lab::plot::svg(&[
         Panel {
             title: "depth error vs reference".into(),
             x_label: "Mrays/s (all rays)".into(),
@@ -542,7 +542,7 @@ pub fn run_with_rows(opts: &ReportOptions) -> Result<(String, Vec<TableRow>), St
         r.spp,
         r.bounces,
         rayon::current_num_threads(),
-        crate::solvers::target_features(),
+        crate::lab::solvers::target_features(),
         opts.size
     );
     let _ = writeln!(
@@ -569,7 +569,7 @@ pub fn run_with_rows(opts: &ReportOptions) -> Result<(String, Vec<TableRow>), St
     let mut ran = Vec::new();
     let mut points = Vec::new();
     for name in &opts.scenes {
-        let mut scene = crate::scene_file::builtin_or_file(name, opts.size)?;
+        let mut scene = crate::scene::scene_file::builtin_or_file(name, opts.size)?;
         scene.set_seam_rule(opts.seam_rule);
         let stem = image_stem(name);
         eprintln!(

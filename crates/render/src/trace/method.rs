@@ -1,14 +1,14 @@
 //! The methods a scene can be rendered with, by name ([`Method`]): which scenes each
 //! supports, and the [`Tracer`] each builds.
 
-use crate::objects::ObjectUnion;
-use crate::resample::GeometryImageTracer;
-use crate::scenes::{Content, Scene};
-use crate::tessellate::Tessellated;
-use crate::tracer::Tracer;
-use crate::tracers::{
+use crate::scene::scenes::{Content, Scene};
+use crate::trace::geometry_image::GeometryImageTracer;
+use crate::trace::methods::{
     ConeTracer, Marching, Nonlinear, Projective, TessellationFree, VolumeMarching,
 };
+use crate::trace::objects::ObjectUnion;
+use crate::trace::tessellate::Tessellated;
+use crate::trace::tracer::Tracer;
 use nlrt_baselines::Rectification;
 use std::fmt;
 
@@ -237,7 +237,7 @@ impl Method {
                 )
             }
             Method::GeometryImageF32 | Method::GeometryImageF64 => {
-                crate::resample::unsupported_reason(scene)
+                crate::trace::geometry_image::unsupported_reason(scene)
             }
             Method::MarchingF32 | Method::MarchingF64 => None,
             Method::DistanceMapF32 | Method::DistanceMapF64 => match &scene.content {
@@ -349,15 +349,17 @@ impl Method {
             Method::CurvedF32 => Box::new(Marching::<f32>::curved(scene)?),
             Method::CurvedF64 => Box::new(Marching::<f64>::curved(scene)?),
             #[cfg(feature = "embree")]
-            Method::EmbreeF32 => Box::new(crate::embree_reference::EmbreeTessellated::new(
+            Method::EmbreeF32 => Box::new(crate::trace::embree_reference::EmbreeTessellated::new(
                 scene,
-                crate::embree_reference::Isa::Build,
+                crate::trace::embree_reference::Isa::Build,
             )?),
             #[cfg(feature = "embree")]
-            Method::EmbreeNativeF32 => Box::new(crate::embree_reference::EmbreeTessellated::new(
-                scene,
-                crate::embree_reference::Isa::Native,
-            )?),
+            Method::EmbreeNativeF32 => {
+                Box::new(crate::trace::embree_reference::EmbreeTessellated::new(
+                    scene,
+                    crate::trace::embree_reference::Isa::Native,
+                )?)
+            }
             #[cfg(not(feature = "embree"))]
             Method::EmbreeF32 | Method::EmbreeNativeF32 => return None,
             Method::Tessellated => Box::new(Tessellated::new(scene)),

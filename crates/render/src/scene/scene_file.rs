@@ -39,9 +39,9 @@
 //! amplitude = 1.0        # optional
 //! ```
 
-use crate::animation::{Deformation, Motion, Pose};
-use crate::material::Material;
-use crate::scenes::{Camera, Content, Scene};
+use crate::scene::material::Material;
+use crate::scene::motion::{Deformation, Motion, Pose};
+use crate::scene::scenes::{Camera, Content, Scene};
 use nlrt_accel::{HeightField, Wrap};
 use nlrt_poly::glam::{DVec2, DVec3};
 use serde::Deserialize;
@@ -167,21 +167,21 @@ pub struct Source<'a> {
     pub max_map_side: usize,
 }
 
-/// A built-in scene by name ([`crate::scenes::builtin`] at `size`), or the scene file at
+/// A built-in scene by name ([`crate::scene::scenes::builtin`] at `size`), or the scene file at
 /// `name` when it ends in `.toml` (its maps at their own size).
 ///
 /// # Errors
 /// An unknown name (the message lists the built-in scenes), or the reasons of [`load`].
-pub fn builtin_or_file(name: &str, size: crate::scenes::Size) -> Result<Scene, String> {
+pub fn builtin_or_file(name: &str, size: crate::scene::scenes::Size) -> Result<Scene, String> {
     if name.ends_with(".toml") {
         return load(Path::new(name));
     }
-    let known = crate::scenes::is_builtin(name);
-    crate::scenes::builtin(name, size).filter(|_| known).ok_or_else(|| {
+    let known = crate::scene::scenes::is_builtin(name);
+    crate::scene::scenes::builtin(name, size).filter(|_| known).ok_or_else(|| {
         format!(
             "unknown scene '{name}' (built-in scenes: {}; variants: {}; or a scene file *.toml)",
-            crate::scenes::SCENE_NAMES.join(", "),
-            crate::scenes::VARIANT_NAMES.join(", ")
+            crate::scene::scenes::SCENE_NAMES.join(", "),
+            crate::scene::scenes::VARIANT_NAMES.join(", ")
         )
     })
 }
@@ -367,8 +367,12 @@ pub fn load_from(path: &Path, source: &Source<'_>) -> Result<Scene, String> {
 
 type ObjData = (Vec<DVec3>, Vec<DVec3>, Vec<DVec2>, Vec<[u32; 3]>);
 
-/// The most `[[object]]` tables a scene file may have ([`crate::objects::MAX_OBJECTS`]).
-pub const MAX_OBJECTS: usize = crate::objects::MAX_OBJECTS;
+/// The most `[[object]]` tables a scene file may have: a ray tests every object's root box in
+/// turn ([`crate::trace::objects::ObjectUnion`]), so a ray that misses them all costs one box
+/// test per object; 256 of them are of the order of one ray's walk through one surface (tens
+/// to hundreds of child tests per ray, docs/measurements.md), past which a tree over the
+/// objects would be the tool.
+pub const MAX_OBJECTS: usize = 256;
 
 /// One object of a scene file, loaded and placed.
 struct ObjectData {

@@ -4,10 +4,10 @@
 //! compares different rays; replaying one stream does not.
 //!
 //! ```
-//! use nlrt_render::integrator::{RenderOptions, render_recording};
-//! use nlrt_render::ray_stream::{RayKind, replay};
-//! use nlrt_render::scenes::{Size, builtin};
-//! use nlrt_render::tracers::Nonlinear;
+//! use nlrt_render::trace::integrator::{RenderOptions, render_recording};
+//! use nlrt_render::trace::ray_stream::{RayKind, replay};
+//! use nlrt_render::scene::scenes::{Size, builtin};
+//! use nlrt_render::trace::methods::Nonlinear;
 //!
 //! let scene = builtin("torus", Size::Small).unwrap();
 //! let tracer = Nonlinear::<f32>::new(&scene);
@@ -20,7 +20,7 @@
 //! assert_eq!(primary.rays, frame.primary_rays);
 //! ```
 
-use crate::tracer::Tracer;
+use crate::trace::tracer::Tracer;
 use nlrt_poly::glam::DVec3;
 use rayon::prelude::*;
 

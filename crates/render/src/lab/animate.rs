@@ -1,4 +1,4 @@
-//! `nlrt animate`: a scene's base mesh in motion ([`crate::animation`]), frame by frame.
+//! `nlrt animate`: a scene's base mesh in motion ([`crate::scene::motion`]), frame by frame.
 //!
 //! Nonlinear tracing keeps the displacement in texture space, so per frame only the TLAS over
 //! the prisms follows the new pose (refitted, or rebuilt by [`TlasUpdate`]); the min-max
@@ -9,13 +9,13 @@
 //! against a fresh build's, the render time, and (unless turned off) a check that every
 //! primary hit equals that of a fresh build of the same frame.
 
-use crate::image::write_png;
-use crate::integrator::{self, Frame, RenderOptions};
-use crate::method::Method;
-use crate::objects::ObjectUnion;
-use crate::scenes::Scene;
-use crate::tracer::Tracer;
-use crate::tracers::Nonlinear;
+use crate::scene::scenes::Scene;
+use crate::trace::image::write_png;
+use crate::trace::integrator::{self, Frame, RenderOptions};
+use crate::trace::method::Method;
+use crate::trace::methods::Nonlinear;
+use crate::trace::objects::ObjectUnion;
+use crate::trace::tracer::Tracer;
 use nlrt_accel::TlasUpdate;
 use nlrt_poly::Real;
 use std::path::PathBuf;

@@ -1,6 +1,6 @@
 //! Writing frames: 8-bit sRGB PNG of the colour, 32-bit OpenEXR of the AOVs.
 
-use crate::integrator::Frame;
+use crate::trace::integrator::Frame;
 
 /// 8-bit sRGB of a linear value (clamped).
 #[must_use]

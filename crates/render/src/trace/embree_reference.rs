@@ -12,9 +12,9 @@ use std::sync::atomic::{AtomicIsize, Ordering};
 use embree::sys;
 use nlrt_poly::glam::DVec3;
 
-use crate::scenes::Scene;
-use crate::tessellate::Tessellated;
-use crate::tracer::{TraceHit, Tracer};
+use crate::scene::scenes::Scene;
+use crate::trace::tessellate::Tessellated;
+use crate::trace::tracer::{TraceHit, Tracer};
 
 /// An Embree device and committed scene holding a scene's tessellation.
 pub struct EmbreeTessellated {
@@ -258,7 +258,7 @@ impl Drop for EmbreeTessellated {
 
 /// A plain Embree scene of world triangles (kernels `isa`): hits carry the triangle's index
 /// as [`TraceHit::id`]. The pre-tessellated side of a comparison with
-/// [`crate::embree_user::EmbreeWithSurface`].
+/// [`crate::trace::embree_user::EmbreeWithSurface`].
 pub struct EmbreeTriangles {
     device: sys::RTCDevice,
     scene: sys::RTCScene,

@@ -25,8 +25,8 @@ use super::{
     DistanceError, GhostCount, HitJudgement, JudgedHits, LEAK_TOLERANCE, LeakEdge, LeakReport,
     Verdict, count_leak, oracle_scene, shell_point_on_ray, spacing, to_f64, vertex_neighbours,
 };
-use crate::method::Method;
-use crate::scenes::Scene;
+use crate::scene::scenes::Scene;
+use crate::trace::method::Method;
 use nlrt_accel::{ShellHit, ShellSurface, TraversalStats};
 use nlrt_oracle::families::SplitMix64;
 use nlrt_oracle::shell::{TrueHit, true_microtriangle_hit};
@@ -687,8 +687,8 @@ pub(super) fn measure<T: Real>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scenes::{Size, builtin};
-    use crate::tracers::Nonlinear;
+    use crate::scene::scenes::{Size, builtin};
+    use crate::trace::methods::Nonlinear;
 
     /// A built-in shell scene at small size and its surface in `T`.
     fn small_shell_scene<T: Real>(name: &str) -> (Scene, ShellSurface<T>) {
@@ -803,7 +803,7 @@ mod tests {
     fn rays_at_a_brick_corner_hit_in_f32() {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("../../scenes/terrain-and-wall.toml");
-        let scene = crate::scene_file::load(&path).expect("the example scene file loads");
+        let scene = crate::scene::scene_file::load(&path).expect("the example scene file loads");
         let wall = &scene.others[0];
         let Nonlinear::Shell(surface) = Nonlinear::<f32>::new(wall) else {
             unreachable!("the wall is shell-mapped")

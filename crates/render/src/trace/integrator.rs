@@ -3,10 +3,10 @@
 //! incoherent secondary rays are measured as in the paper. Rays are generated and shaded in
 //! f64; only the intersection runs in the method's precision, behind [`Tracer`].
 
-use crate::material::Rng;
-use crate::ray_stream::{RayKind, RayStream, StreamRay};
-use crate::scenes::Scene;
-use crate::tracer::Tracer;
+use crate::scene::material::Rng;
+use crate::scene::scenes::Scene;
+use crate::trace::ray_stream::{RayKind, RayStream, StreamRay};
+use crate::trace::tracer::Tracer;
 use nlrt_poly::glam::DVec3;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -80,7 +80,7 @@ pub fn render(
     render_with(scene, tracer, opts, progress, false).0
 }
 
-/// [`render`], also recording every ray it casts (for [`crate::ray_stream::replay`]); the
+/// [`render`], also recording every ray it casts (for [`crate::trace::ray_stream::replay`]); the
 /// frame's time includes the recording.
 #[must_use]
 pub fn render_recording(

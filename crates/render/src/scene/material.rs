@@ -14,7 +14,7 @@ const STREAM_STATE: u128 = 0xcafe_f00d_d15e_a5e5_7e57_ab1e_0dd5_eed5;
 /// pixel, so an image does not depend on how rows are scheduled on threads.
 ///
 /// ```
-/// use nlrt_render::material::Rng;
+/// use nlrt_render::scene::material::Rng;
 /// let (mut a, mut b) = (Rng::stream(3), Rng::stream(3));
 /// let x = a.next_f64();
 /// assert!((0.0..1.0).contains(&x) && x == b.next_f64());

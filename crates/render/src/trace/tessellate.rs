@@ -5,7 +5,7 @@
 //! nonlinear one by design (flat world triangles instead of the curved images of flat
 //! microtriangles); the report states their distance.
 
-use crate::scenes::{Content, Scene};
+use crate::scene::scenes::{Content, Scene};
 use nlrt_accel::{
     Aabb, Bvh4, EDGE_VERTICES, HEIGHT_ONE, HeightField, SeamRule, Seams, SlabRay, Wrap,
     ray_triangle,

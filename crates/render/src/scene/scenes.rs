@@ -58,9 +58,9 @@ mod tests {
     /// agrees to its rounding.
     #[test]
     fn a_midlevel_moves_the_surface_and_every_method_with_it() {
-        use crate::tessellate::Tessellated;
-        use crate::tracer::Tracer;
-        use crate::tracers::Nonlinear;
+        use crate::trace::methods::Nonlinear;
+        use crate::trace::tessellate::Tessellated;
+        use crate::trace::tracer::Tracer;
         let scene = builtin("mountain-midlevel", Size::Small).unwrap();
         let zero = builtin("mountain", Size::Small).unwrap();
         assert_eq!((scene.midlevel, zero.midlevel), (0.5, 0.0));

@@ -13,10 +13,10 @@
 //! The partial update is verified: after all strokes, camera rays traced through the updated
 //! surface and through one built from scratch from the same samples hit at the same distances.
 
-use crate::material::Rng;
-use crate::scenes::{self, Content, Scene, Size};
-use crate::tessellate::Tessellated;
-use crate::tracers::Nonlinear;
+use crate::scene::material::Rng;
+use crate::scene::scenes::{self, Content, Scene, Size};
+use crate::trace::methods::Nonlinear;
+use crate::trace::tessellate::Tessellated;
 use nlrt_accel::{DisplacedSurface, HeightField, TraversalStats};
 use nlrt_poly::glam::DVec3;
 use nlrt_shellmap::Ray;
@@ -144,7 +144,7 @@ pub fn run(opts: &EditOptions) -> Result<EditReport, String> {
     let mut edited = scene.clone();
     edited.content = Content::Displacement(surface.field().clone());
     let start = Instant::now();
-    let image = crate::resample::geometry_image::<f32>(&edited);
+    let image = crate::trace::geometry_image::geometry_image::<f32>(&edited);
     let geometry_image_seconds = start.elapsed().as_secs_f64();
     drop(image);
     let tessellated_seconds = opts.reference.then(|| {

@@ -1,10 +1,10 @@
 //! A seam scene with and without the seam rule ([`nlrt_accel::SeamRule`]), side by side, with
 //! the crack pixels marked: the report's picture of what the rule closes.
 
-use crate::integrator::{Frame, RenderOptions, render};
-use crate::scenes::Scene;
-use crate::tracers::Nonlinear;
-use crate::watertight::LEAK_TOLERANCE;
+use crate::lab::watertight::LEAK_TOLERANCE;
+use crate::scene::scenes::Scene;
+use crate::trace::integrator::{Frame, RenderOptions, render};
+use crate::trace::methods::Nonlinear;
 use nlrt_accel::SeamRule;
 
 /// The two renders (nonlinear tracing in f32) and where they differ.
@@ -113,7 +113,8 @@ mod tests {
     /// rays reaches the base unhit.
     #[test]
     fn the_seam_cube_cracks_open_without_the_rule_only() {
-        let scene = crate::scenes::builtin("seam-cube", crate::scenes::Size::Small).unwrap();
+        let scene =
+            crate::scene::scenes::builtin("seam-cube", crate::scene::scenes::Size::Small).unwrap();
         let opts = RenderOptions {
             width: 64,
             height: 48,

@@ -1,0 +1,113 @@
+//! What the commands share: the error exit, scene names and lookup, table cells, the default
+//! job's sizes.
+
+use nlrt_render::lab::watertight;
+use nlrt_render::scene::scenes::{self, SCENE_NAMES, Size};
+use std::process::ExitCode;
+/// Image size `WxH`.
+pub fn distance_cell(r: &watertight::LeakReport) -> String {
+    r.distance_error.map_or("-".into(), |d| {
+        format!(
+            "{:.1e} / {:.1e} / {:.1e} ({}, {})",
+            d.median, d.p99, d.max, d.samples, d.unverified
+        )
+    })
+}
+
+/// Ghost hits, grazing near misses and hits too far among the hits judged by the oracle, or
+/// `-`.
+pub fn ghost_cell(r: &watertight::LeakReport) -> String {
+    r.ghosts.as_ref().map_or("- | - | -".into(), |g| {
+        format!("{} of {} | {} | {}", g.ghosts, g.hits, g.grazing, g.too_far)
+    })
+}
+
+pub fn fail(command: &str, message: impl std::fmt::Display) -> ExitCode {
+    eprintln!("nlrt {command}: {message}");
+    ExitCode::from(2)
+}
+
+pub fn check_scenes(names: &[String]) -> Result<(), String> {
+    for n in names {
+        if !(scenes::is_builtin(n) || n.ends_with(".toml")) {
+            return Err(format!(
+                "unknown scene '{n}' (built-in scenes: {}; variants: {})",
+                SCENE_NAMES.join(", "),
+                scenes::VARIANT_NAMES.join(", ")
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The built-in scenes and variants as the help lists them (from the list the code builds,
+/// so the help cannot fall behind it).
+pub fn builtin_list() -> String {
+    format!(
+        "{}; variants {}",
+        SCENE_NAMES.join(", "),
+        scenes::VARIANT_NAMES.join(", ")
+    )
+}
+
+/// The built-in displacement scenes `nlrt watertight` is meant for, each once: the judged
+/// ones, the ghost-hit tori, the seam scenes, the cone fur and the cylinder.
+pub fn judged_scene_names() -> Vec<&'static str> {
+    let mut names: Vec<&'static str> = Vec::new();
+    for name in scenes::WATERTIGHT_SCENES
+        .iter()
+        .chain(scenes::GHOST_SCENES.iter())
+        .chain(scenes::SEAM_SCENES.iter())
+        .chain(["fur-cones", "cylinder"].iter())
+        .chain(["scales", "feathers", "cornell", "highpoly", "fig9"].iter())
+    {
+        if !names.contains(name) {
+            names.push(name);
+        }
+    }
+    names
+}
+
+/// Help for a scene argument: `what` (built-in scenes listed) or a scene file.
+pub fn scene_help(what: &str) -> String {
+    format!(
+        "{what} ({}) or a scene file (`*.toml`, see the README)",
+        builtin_list()
+    )
+}
+
+/// A built-in scene by name, or a scene file (`*.toml`).
+pub fn resolve_scene(
+    name: &str,
+    size: Size,
+    seam_rule: nlrt_accel::SeamRule,
+) -> Result<scenes::Scene, String> {
+    let mut scene = nlrt_render::scene::scene_file::builtin_or_file(name, size)?;
+    scene.set_seam_rule(seam_rule);
+    Ok(scene)
+}
+
+/// Hits per scene and precision the report judges for ghosts: the oracle's 0.3 ms per hit
+/// keeps the default job's watertightness section within seconds (`nlrt watertight` judges
+/// every hit).
+pub const REPORT_GHOST_SAMPLES: usize = 4096;
+
+/// Hits per scene and precision whose distance the report compares with the oracle's: at
+/// `watertight::DISTANCE_SAMPLES` (1,024) they took about 4 s per scene of the torus and the
+/// fur (2026-12-03, 2-core machine), a third of the watertightness section.
+pub const REPORT_DISTANCE_SAMPLES: usize = 256;
+
+/// Image size of the default job (`cargo run --release`): 320 x 240, the size of
+/// `nlrt report`, took 129 s of its scene renders (2026-12-03, 2-core machine, the whole job
+/// 176 s), too near its 3 minutes on a loaded machine; 256 x 192 has 0.64 of the pixels.
+pub const DEFAULT_JOB_SIZE: (usize, usize) = (256, 192);
+
+/// Side of the report's watertightness grid (16,384 rays per scene): at 256^2 the section
+/// took 72 s of the default job (2026-12-03, 2-core machine), which must stay under 3
+/// minutes; `nlrt watertight --rays N` judges as many as asked (the 1M-ray tables of
+/// docs/watertightness.md).
+pub const REPORT_WATERTIGHT_GRID: usize = 128;
+
+/// Cubics per precision in the report's solver table (`nlrt report --solver-samples`,
+/// `nlrt solvers --samples` for more): 50,000 took 31 s of the default job (same run).
+pub const REPORT_SOLVER_SAMPLES: usize = 20_000;

@@ -1,0 +1,197 @@
+//! `nlrt render`, `nlrt bench` and `nlrt export`.
+
+use super::args::*;
+use super::common::*;
+use nlrt_render::lab::report::{self, ReportOptions};
+use nlrt_render::scene::scenes::SCENE_NAMES;
+use nlrt_render::trace::method::Method;
+use std::process::ExitCode;
+
+impl RenderCommand {
+    /// Runs `nlrt render`.
+    pub fn run(self, seam_rule: nlrt_accel::SeamRule) -> ExitCode {
+        let Self {
+            scene,
+            precision,
+            method,
+            args,
+            output,
+            aov,
+        } = self;
+        let built = match resolve_scene(&scene, args.scene_size(), seam_rule) {
+            Ok(s) => s,
+            Err(e) => return fail("render", e),
+        };
+        let method = match (method, precision) {
+            (MethodKind::Nonlinear, Precision::F32) => Method::NonlinearF32,
+            (MethodKind::Nonlinear, Precision::F64) => Method::NonlinearF64,
+            (MethodKind::TessellationFree, Precision::F32) => Method::AffineF32,
+            (MethodKind::TessellationFree, Precision::F64) => Method::AffineF64,
+            (MethodKind::GeometryImage, Precision::F32) => Method::GeometryImageF32,
+            (MethodKind::GeometryImage, Precision::F64) => Method::GeometryImageF64,
+            (MethodKind::Marching, Precision::F32) => Method::MarchingF32,
+            (MethodKind::Marching, Precision::F64) => Method::MarchingF64,
+            (MethodKind::DistanceMap, Precision::F32) => Method::DistanceMapF32,
+            (MethodKind::DistanceMap, Precision::F64) => Method::DistanceMapF64,
+            (MethodKind::Tetrahedra, Precision::F32) => Method::TetrahedraF32,
+            (MethodKind::Tetrahedra, Precision::F64) => Method::TetrahedraF64,
+            (MethodKind::Projective, Precision::F32) => Method::ProjectiveF32,
+            (MethodKind::Projective, Precision::F64) => Method::ProjectiveF64,
+            (MethodKind::ConeRay, Precision::F32) => Method::ConeRayF32,
+            (MethodKind::ConeRay, Precision::F64) => Method::ConeRayF64,
+            (MethodKind::ConeCone, Precision::F32) => Method::ConeConeF32,
+            (MethodKind::ConeCone, Precision::F64) => Method::ConeConeF64,
+            (MethodKind::Curved, Precision::F32) => Method::CurvedF32,
+            (MethodKind::Curved, Precision::F64) => Method::CurvedF64,
+            (MethodKind::Embree, _) => Method::EmbreeF32,
+            (MethodKind::Tessellated, _) => Method::Tessellated,
+            (MethodKind::TessellatedCurved, _) => Method::TessellatedCurved,
+        };
+        if let Some(why) = method.unsupported_reason(&built) {
+            return fail("render", format!("{method} cannot render {scene}: {why}"));
+        }
+        // Scene files are checked in f64 when loaded; a value finite in f64 may not be
+        // in f32.
+        if method.slug().ends_with("-f32")
+            && let Err(e) = built.check_precision::<f32>()
+        {
+            return fail("render", format!("{scene}: {e}"));
+        }
+        let opts = ReportOptions {
+            scenes: vec![scene.clone()],
+            size: args.scene_size(),
+            render: args.options(),
+            methods: vec![method],
+            out_dir: None,
+            scaling: false,
+            ray_stream: false,
+            seam_rule,
+            rounds: 1,
+        };
+        let seams = built.describe_seams();
+        if !seams.is_empty() {
+            eprintln!("{scene}: {}", seams.trim_start_matches(", "));
+        }
+        let runs = report::run_scene(&built, &opts);
+        let run = &runs[0];
+        if let Err(e) = nlrt_render::trace::image::write_png(
+            &output,
+            run.frame.width,
+            run.frame.height,
+            &run.frame.rgb8(),
+        ) {
+            return fail("render", format!("cannot write {}: {e}", output.display()));
+        }
+        if let Some(path) = &aov
+            && let Err(e) = run.frame.write_aovs_exr(path)
+        {
+            return fail("render", e);
+        }
+        println!(
+            "{scene} ({method}): init {:.3} s, {:.3} Mrays/s ({} rays), written to {}",
+            run.init_seconds,
+            run.all_mrays(),
+            run.frame.all_rays,
+            output.display()
+        );
+        ExitCode::SUCCESS
+    }
+}
+
+impl BenchCommand {
+    /// Runs `nlrt bench`.
+    pub fn run(self, seam_rule: nlrt_accel::SeamRule) -> ExitCode {
+        let Self {
+            scenes,
+            args,
+            no_reference,
+            methods,
+            no_ray_stream,
+            json,
+            rounds,
+        } = self;
+        if rounds > 1 && no_ray_stream {
+            return fail(
+                "bench",
+                "--rounds interleaves the ray stream's replays; it cannot go with --no-ray-stream",
+            );
+        }
+        let scenes = if scenes.is_empty() {
+            SCENE_NAMES.iter().map(|s| s.to_string()).collect()
+        } else {
+            scenes
+        };
+        if let Err(e) = check_scenes(&scenes) {
+            return fail("bench", e);
+        }
+        // Opened before the run, so that an unwritable path fails at once, not after it.
+        let json_file = json.as_deref().map(|path| {
+            std::fs::File::create(path)
+                .map(|file| (path, file))
+                .map_err(|e| format!("cannot write {}: {e}", path.display()))
+        });
+        let json_file = match json_file.transpose() {
+            Ok(f) => f,
+            Err(e) => return fail("bench", e),
+        };
+        let methods = Method::ALL
+            .into_iter()
+            .filter(|m| methods.is_empty() || methods.contains(m))
+            .filter(|&m| !(no_reference && m.is_reference()))
+            .collect();
+        let opts = ReportOptions {
+            scenes,
+            size: args.scene_size(),
+            render: args.options(),
+            methods,
+            out_dir: None,
+            scaling: true,
+            ray_stream: !no_ray_stream,
+            seam_rule,
+            rounds: rounds as usize,
+        };
+        match report::run_with_rows(&opts) {
+            Ok((md, rows)) => {
+                print!("{md}");
+                if let Some((path, mut file)) = json_file {
+                    use std::io::Write as _;
+                    let text = nlrt_render::lab::bench_json::to_json(&opts, &rows);
+                    if let Err(e) = file.write_all(text.as_bytes()) {
+                        return fail("bench", format!("cannot write {}: {e}", path.display()));
+                    }
+                }
+                ExitCode::SUCCESS
+            }
+            Err(e) => fail("bench", e),
+        }
+    }
+}
+
+impl ExportCommand {
+    /// Runs `nlrt export`.
+    pub fn run(self) -> ExitCode {
+        let Self {
+            scene,
+            scene_size,
+            output,
+        } = self;
+        let built = match nlrt_render::scene::scene_file::builtin_or_file(&scene, scene_size.into())
+        {
+            Ok(s) => s,
+            Err(e) => return fail("export", e),
+        };
+        // A scene file is written under its own stem (its scenes are all named "file").
+        let name = std::path::Path::new(&scene)
+            .file_stem()
+            .and_then(|s| s.to_str())
+            .filter(|_| scene.ends_with(".toml"))
+            .unwrap_or(built.name);
+        match nlrt_render::scene::scene_file::export_as(&built, name, &output) {
+            Ok(path) => {
+                println!("{scene} written to {}", path.display());
+                ExitCode::SUCCESS
+            }
+            Err(e) => fail("export", e),
+        }
+    }
+}

@@ -1,0 +1,266 @@
+//! `nlrt watertight`: each object of a scene judged against the oracle.
+
+use super::args::*;
+use super::common::*;
+use nlrt_render::lab::watertight;
+use nlrt_render::scene::scenes::{self};
+use nlrt_render::trace::method::Method;
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+impl WatertightCommand {
+    /// Runs `nlrt watertight`.
+    pub fn run(self, seam_rule: nlrt_accel::SeamRule) -> ExitCode {
+        let Self {
+            scene,
+            rays,
+            precision,
+            method,
+            scene_size,
+            ghost_samples,
+            frame,
+            frames,
+            output,
+        } = self;
+        let built = if scene.ends_with(".toml") {
+            match nlrt_render::scene::scene_file::load(std::path::Path::new(&scene)) {
+                Ok(s) => s,
+                Err(e) => return fail("watertight", e),
+            }
+        } else {
+            let known = scenes::is_builtin(&scene);
+            match scenes::builtin(&scene, scene_size.into()).filter(|_| known) {
+                Some(s) => s,
+                None => {
+                    return fail(
+                        "watertight",
+                        format!(
+                            "unknown scene '{scene}' (scenes: {}, or a scene file *.toml)",
+                            judged_scene_names().join(", ")
+                        ),
+                    );
+                }
+            }
+        };
+        let mut built = built;
+        built.set_seam_rule(seam_rule);
+        if let Some(k) = frame
+            && k >= frames
+        {
+            return fail(
+                "watertight",
+                format!(
+                    "--frame {k} is not a frame of --frames {frames} (0 to {})",
+                    frames - 1
+                ),
+            );
+        }
+        // Scene files are checked in f64 when loaded; f32 is judged too unless excluded.
+        if !matches!(precision, Some(Precision::F64))
+            && let Err(e) = built.check_precision::<f32>()
+        {
+            return fail("watertight", format!("{scene}: {e}"));
+        }
+        for (k, object) in built.objects().enumerate() {
+            // Leak images are named after the scene, or a scene file's stem (a path is no
+            // file name).
+            let file_stem = std::path::Path::new(&scene)
+                .file_stem()
+                .and_then(|s| s.to_str())
+                .filter(|_| scene.ends_with(".toml"))
+                .unwrap_or(&scene);
+            let (label, stem) = if built.others.is_empty() {
+                (scene.clone(), file_stem.to_string())
+            } else {
+                (
+                    format!("{scene} object {}", k + 1),
+                    format!("{file_stem}-object-{}", k + 1),
+                )
+            };
+            if let Err(e) = judge_object(
+                object,
+                &label,
+                &stem,
+                k == 0,
+                rays,
+                precision,
+                method,
+                ghost_samples,
+                frame,
+                frames,
+                &output,
+            ) {
+                return fail("watertight", e);
+            }
+        }
+        ExitCode::SUCCESS
+    }
+}
+
+/// `nlrt watertight` on one object of a scene (`built` traced alone, its `others` not looked
+/// at): `scene` labels its rows and messages, `stem` names its leak images, `header` prints
+/// the table's header first.
+#[allow(clippy::too_many_arguments)]
+pub fn judge_object(
+    built: &scenes::Scene,
+    scene: &str,
+    stem: &str,
+    header: bool,
+    rays: u64,
+    precision: Option<Precision>,
+    method: Option<MethodKind>,
+    ghost_samples: Option<u64>,
+    frame: Option<u32>,
+    frames: u32,
+    output: &Option<PathBuf>,
+) -> Result<(), String> {
+    let side = ((rays as f64).sqrt().ceil() as usize).max(1);
+    // Shell-mapped scenes are judged for nonlinear tracing only (the other judged
+    // methods displace a height field); asking for another says so.
+    let shell = matches!(built.content, scenes::Content::Shell(_));
+    let mut methods = watertight::METHODS
+        .into_iter()
+        .filter(|m| {
+            let precision_ok = match precision {
+                Some(Precision::F32) => m.name().ends_with("f32"),
+                Some(Precision::F64) => m.name().ends_with("f64"),
+                None => true,
+            };
+            let method_ok = match method {
+                Some(MethodKind::Nonlinear) => {
+                    matches!(m, Method::NonlinearF32 | Method::NonlinearF64)
+                }
+                Some(MethodKind::TessellationFree) => {
+                    matches!(m, Method::AffineF32 | Method::AffineF64)
+                }
+                Some(MethodKind::Marching) => {
+                    matches!(m, Method::MarchingF32 | Method::MarchingF64)
+                }
+                Some(MethodKind::DistanceMap) => {
+                    matches!(m, Method::DistanceMapF32 | Method::DistanceMapF64)
+                }
+                Some(MethodKind::Tetrahedra) => {
+                    matches!(m, Method::TetrahedraF32 | Method::TetrahedraF64)
+                }
+                Some(
+                    MethodKind::Tessellated
+                    | MethodKind::Embree
+                    | MethodKind::TessellatedCurved
+                    | MethodKind::GeometryImage
+                    | MethodKind::Projective
+                    | MethodKind::Curved
+                    | MethodKind::ConeRay
+                    | MethodKind::ConeCone,
+                ) => false,
+                None => !shell || matches!(m, Method::NonlinearF32 | Method::NonlinearF64),
+            };
+            precision_ok && method_ok
+        })
+        .peekable();
+    if methods.peek().is_none() {
+        let judged: Vec<&str> = watertight::METHODS.iter().map(|m| m.slug()).collect();
+        return Err(format!(
+            "no method to judge: watertightness is measured for {} (the references are what it judges against; the other methods have no per-texel surface to decide leaks on)",
+            judged.join(", ")
+        ));
+    }
+    // Methods the scene's map does not suit (a cone or distance map on a map that is
+    // not square with a power-of-two side) are left out, and said so; asked for alone,
+    // the reason is the error.
+    let (methods, unsupported): (Vec<Method>, Vec<Method>) =
+        methods.partition(|m| shell || m.unsupported_reason_for_object(built).is_none());
+    if let Some(first) = unsupported.first() {
+        let why = first
+            .unsupported_reason_for_object(built)
+            .unwrap_or_default();
+        if methods.is_empty() {
+            return Err(format!("{scene}: {}: {why}", first.name()));
+        }
+        let names: Vec<&str> = unsupported.iter().map(|m| m.name()).collect();
+        eprintln!("{scene}: not judged: {} ({why})", names.join(", "));
+    }
+    if header {
+        println!(
+            "| scene | method | rays | decided | leaks | rate | 95% interval | ghost hits (of hits judged) | grazing | too far | hit distance vs oracle: median / p99 / max rel. error (hits compared, unverified) | seconds |"
+        );
+        println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
+    }
+    let judged_hits = ghost_samples.map_or(watertight::JudgedHits::Every, |n| {
+        watertight::JudgedHits::Spaced {
+            ghosts: usize::try_from(n).unwrap_or(usize::MAX),
+            distances: watertight::DISTANCE_SAMPLES,
+        }
+    });
+    let at = frame.map(|k| (k as usize, frames as usize));
+    let reports = match watertight::measure_all_at_frame(built, at, side, &methods, judged_hits) {
+        Ok(r) => r,
+        Err(e) => return Err(format!("{scene}: {e}")),
+    };
+    let label = frame.map_or(scene.to_string(), |k| {
+        format!("{scene} frame {k} of {frames}")
+    });
+    let seams = built.describe_seams();
+    if !seams.is_empty() {
+        eprintln!("{scene}: {}", seams.trim_start_matches(", "));
+    }
+    let mut where_leaked = Vec::new();
+    for r in reports {
+        if !r.leak_edges.is_empty() {
+            // At most this many places listed per method: enough to find them again.
+            const LISTED: usize = 8;
+            let places: Vec<String> = r
+                .leak_edges
+                .iter()
+                .take(LISTED)
+                .map(|e| {
+                    format!(
+                        "triangle {} edge {}{}: {}",
+                        e.triangle,
+                        e.edge,
+                        if e.seam { " (seam)" } else { "" },
+                        e.leaks
+                    )
+                })
+                .collect();
+            let more = r.leak_edges.len().saturating_sub(LISTED);
+            where_leaked.push(format!(
+                "{}: leaks by base triangle and nearest edge: {}{}",
+                r.method,
+                places.join(", "),
+                if more > 0 {
+                    format!(", and {more} more")
+                } else {
+                    String::new()
+                }
+            ));
+        }
+        let (lo, hi) = r.wilson_95();
+        println!(
+            "| {label} | {} | {} | {} | {} | {:.2e} | [{:.1e}, {:.1e}] | {} | {} | {:.1} |",
+            r.method,
+            r.rays,
+            r.decided,
+            r.leaks,
+            r.rate(),
+            lo,
+            hi,
+            ghost_cell(&r),
+            distance_cell(&r),
+            r.seconds
+        );
+        if let Some(dir) = output
+            && !shell
+        {
+            let path = dir.join(format!("{stem}-leaks-{}.png", r.method.slug()));
+            if let Err(e) = std::fs::create_dir_all(dir).and_then(|()| {
+                nlrt_render::trace::image::write_png(&path, side, side, &watertight::leak_image(&r))
+            }) {
+                return Err(format!("cannot write {}: {e}", path.display()));
+            }
+        }
+    }
+    for line in where_leaked {
+        println!("{line}");
+    }
+    Ok(())
+}
