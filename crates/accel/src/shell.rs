@@ -100,13 +100,10 @@ pub struct ShellObject<T: Real> {
 const MAX_OBJECT_LEAF: usize = 4;
 
 /// An object-triangle test's cost in box tests of the object's BVH, for choosing its leaf
-/// size: about one in time. Instructions put it at about 1.5 (`valgrind --tool=callgrind
-/// --toggle-collect='*trace_all*' traversal_counts <scene> paper f32 64` on the five shell
-/// scenes with leaves of 2 and of 4, 2026-12-06: about 1,800 instructions per box test and
-/// 2,800 per triangle test), but a box test's divisions (its uv enclosure) weigh more in
-/// time than in instructions: at 1.5 the feathers (leaf 3) traced 1-4% slower than with
-/// leaves of 4 on the bench's stream; at 1 the choices are the faster ones of each scene
-/// (leaves of 2 on the scales, 4 on the others).
+/// size: about one in time. Instructions put it nearer 1.5, but a box test's divisions (its
+/// uv enclosure) weigh more in time than in instructions: at 1.5 the feathers get a leaf
+/// size that traces slower than leaves of 4, at 1 every shell scene gets its faster one
+/// (docs/measurements.md, "The shell object's leaf size", has the counts and timings).
 const TRIANGLE_TEST_COST: f64 = 1.0;
 
 /// [`Bvh4::weighted_cost`] of an object's tree: a box is reached with the probability of

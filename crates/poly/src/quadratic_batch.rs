@@ -401,9 +401,9 @@ mod tests {
         let typical = typical::<T>(&mut rng, 20_000);
         let hard = hard::<T>(&mut rng, 20_000);
         let raw = raw::<T>(&mut rng, 4_000);
-        // Measured share decided by the kernel (2026-12-05): typical 19,999 (f32) and 20,000
-        // (f64) of 20,000, hard 55% (a
-        // seventh reversed intervals, a third ends placed on a root: the scalar fallback).
+        // The kernel decides nearly every typical lane; of the hard ones (a seventh with
+        // reversed intervals, a third with ends placed on a root) about half go to the scalar
+        // fallback, which is why only the typical share is asserted.
         let decided = decided_by::<T, Portable<T>>(&typical);
         assert!(
             decided * 100 >= typical.len() * 99,

@@ -78,8 +78,8 @@ pub fn decidedly_outside_in_f64<T: Real>(prism: &Prism<T>, ray: &Ray<T>, k: usiz
 /// exactly) nearest `r` on `[lo, hi]`, or at `r` where `f64` finds none there. The `T` root
 /// errs by its cubic's rounding, which carries it across the edge where the ray crosses the
 /// surface on the edge itself: each of two `f32` prisms then found its root on the other's
-/// side and left it to the other (one `f32` leak of the torus at 1M rays, 2026-12-05: roots
-/// 3e-7 from the `f64` ones, about 20 ulps). `false` for `f64`.
+/// side and left it to the other (an `f32` leak of the torus at 1M rays, roots about 20 ulps
+/// from the `f64` ones; docs/watertightness.md). `false` for `f64`.
 #[must_use]
 pub fn root_decidedly_outside_in_f64<T: Real>(
     prism: &Prism<T>,

@@ -94,17 +94,18 @@ pub const REPORT_GHOST_SAMPLES: usize = 4096;
 
 /// Hits per scene and precision whose distance the report compares with the oracle's: at
 /// `watertight::DISTANCE_SAMPLES` (1,024) they took about 4 s per scene of the torus and the
-/// fur (2026-12-03, 2-core machine), a third of the watertightness section.
+/// fur on a 2-core machine, a third of the default job's watertightness section.
 pub const REPORT_DISTANCE_SAMPLES: usize = 256;
 
-/// Image size of the default job (`cargo run --release`): 320 x 240, the size of
-/// `nlrt report`, took 129 s of its scene renders (2026-12-03, 2-core machine, the whole job
-/// 176 s), too near its 3 minutes on a loaded machine; 256 x 192 has 0.64 of the pixels.
+/// Image size of the default job (`cargo run --release`): at 320 x 240, the size of
+/// `nlrt report`, its scene renders took 129 s of a 176 s job on a 2-core machine, too near
+/// its 3 minutes on a loaded one; 256 x 192 has 0.64 of the pixels (the job's time is in
+/// docs/measurements.md, "Whole renders").
 pub const DEFAULT_JOB_SIZE: (usize, usize) = (256, 192);
 
 /// Side of the report's watertightness grid (16,384 rays per scene): at 256^2 the section
-/// took 72 s of the default job (2026-12-03, 2-core machine), which must stay under 3
-/// minutes; `nlrt watertight --rays N` judges as many as asked (the 1M-ray tables of
+/// took 72 s of the default job on a 2-core machine, which must stay under 3 minutes;
+/// `nlrt watertight --rays N` judges as many as asked (the 1M-ray tables of
 /// docs/watertightness.md).
 pub const REPORT_WATERTIGHT_GRID: usize = 128;
 
