@@ -776,11 +776,11 @@ pub fn fuzz_scene_file(data: &[u8]) -> bool {
         scene
             .check_precision::<f64>()
             .is_ok()
-            .then(|| render(&scene, &nonlinear(Method::NonlinearF64), &opts, &|_| {})),
+            .then(|| render(&scene, &nonlinear(Method::NONLINEAR_F64), &opts, &|_| {})),
         scene
             .check_precision::<f32>()
             .is_ok()
-            .then(|| render(&scene, &nonlinear(Method::NonlinearF32), &opts, &|_| {})),
+            .then(|| render(&scene, &nonlinear(Method::NONLINEAR_F32), &opts, &|_| {})),
     ];
     for frame in frames.iter().flatten() {
         assert!(

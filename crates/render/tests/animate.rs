@@ -44,7 +44,7 @@ fn every_frame_of_every_builtin_scene_equals_a_fresh_build() {
                     spp: 1,
                     bounces: 0,
                 },
-                methods: vec![Method::NonlinearF32, Method::NonlinearF64],
+                methods: vec![Method::NONLINEAR_F32, Method::NONLINEAR_F64],
                 update,
                 rebuild_frames: 0,
                 verify: true,

@@ -188,8 +188,8 @@ fn torus_is_watertight() {
     use nlrt_render::lab::watertight::measure;
     let scene = scenes::torus_scene(64);
     for report in [
-        measure(&scene, 256, Method::NonlinearF64).unwrap(),
-        measure(&scene, 256, Method::NonlinearF32).unwrap(),
+        measure(&scene, 256, Method::NONLINEAR_F64).unwrap(),
+        measure(&scene, 256, Method::NONLINEAR_F32).unwrap(),
     ] {
         assert!(
             report.decided > 20_000,
@@ -206,7 +206,7 @@ fn torus_is_watertight() {
         // continued past the edge, not on the neighbour's (measured: 3.9e-5 in f32); it must
         // stay within the leak tolerance, which is what a hit "at the surface" means here.
         let d = report.distance_error.expect("nonlinear reports distances");
-        let bound = if report.method == Method::NonlinearF32 {
+        let bound = if report.method == Method::NONLINEAR_F32 {
             6e-6
         } else {
             1e-14
@@ -231,8 +231,8 @@ fn mountain_at_grazing_angles_is_watertight() {
     scene.camera.eye = DVec3::new(0.0, 0.4, 0.95);
     scene.camera.target = DVec3::new(0.0, 0.25, -1.0);
     for report in [
-        measure(&scene, 256, Method::NonlinearF64).unwrap(),
-        measure(&scene, 256, Method::NonlinearF32).unwrap(),
+        measure(&scene, 256, Method::NONLINEAR_F64).unwrap(),
+        measure(&scene, 256, Method::NONLINEAR_F32).unwrap(),
     ] {
         assert!(
             report.decided > 5_000,
@@ -328,12 +328,12 @@ fn seams_are_closed_by_the_rule_and_leak_without_it() {
     use nlrt_render::lab::watertight::measure;
     for name in scenes::SEAM_SCENES {
         let mut scene = scenes::builtin(name, scenes::Size::Small).unwrap();
-        for method in [Method::NonlinearF32, Method::NonlinearF64] {
+        for method in [Method::NONLINEAR_F32, Method::NONLINEAR_F64] {
             let report = measure(&scene, 128, method).unwrap();
             assert!(report.decided > 5000, "{name} {method}: {}", report.decided);
             assert_eq!(report.leaks, 0, "{name} {method}: {:?}", report.leak_edges);
             let g = report.ghosts.expect("nonlinear hits are judged");
-            let allowed = if method == Method::NonlinearF32 {
+            let allowed = if method == Method::NONLINEAR_F32 {
                 g.hits / 1000
             } else {
                 0
@@ -365,7 +365,7 @@ fn seams_are_closed_by_the_rule_and_leak_without_it() {
             // by passing a step's face at a grazing angle, 67 of 1M rays; too few for this grid.
             continue;
         }
-        let report = measure(&scene, 128, Method::NonlinearF64).unwrap();
+        let report = measure(&scene, 128, Method::NONLINEAR_F64).unwrap();
         let at_seams: usize = report
             .leak_edges
             .iter()
@@ -416,7 +416,7 @@ fn fig9_displaced_columns_nonlinear_is_watertight_tessellation_free_leaks_where_
     // has no surface (as in the paper), so its neighbour's edge with it is open.
     use nlrt_render::lab::watertight::measure;
     let scene = scenes::builtin("fig9-displaced", scenes::Size::Small).unwrap();
-    for method in [Method::NonlinearF32, Method::NonlinearF64] {
+    for method in [Method::NONLINEAR_F32, Method::NONLINEAR_F64] {
         let report = measure(&scene, 256, method).unwrap();
         assert!(
             report.decided > 1000,
@@ -430,7 +430,7 @@ fn fig9_displaced_columns_nonlinear_is_watertight_tessellation_free_leaks_where_
             report.leaks_by_triangle()
         );
     }
-    for method in [Method::AffineF32, Method::AffineF64] {
+    for method in [Method::TESSELLATION_FREE_F32, Method::TESSELLATION_FREE_F64] {
         let report = measure(&scene, 256, method).unwrap();
         // Tessellation-free mapping has no world position for a uv-degenerate triangle's
         // texels, and no seam wall: its leaks are in columns 1 and 2 (and, in f32, possibly
@@ -442,7 +442,7 @@ fn fig9_displaced_columns_nonlinear_is_watertight_tessellation_free_leaks_where_
             .map(|(_, c)| c)
             .sum();
         assert!(degenerate > 0, "{method}: {leaks:?}");
-        if method == Method::AffineF64 {
+        if method == Method::TESSELLATION_FREE_F64 {
             assert_eq!(degenerate, report.leaks, "{method}: {leaks:?}");
         }
     }
@@ -458,15 +458,15 @@ fn other_methods_agree_with_the_reference_where_the_surfaces_coincide() {
     let scene = scenes::mountain(128);
     let reference = render(&scene, &Tessellated::new(&scene), &small(), &|_| {});
     for method in [
-        Method::AffineF32,
-        Method::AffineF64,
-        Method::GeometryImageF32,
-        Method::GeometryImageF64,
+        Method::TESSELLATION_FREE_F32,
+        Method::TESSELLATION_FREE_F64,
+        Method::GEOMETRY_IMAGE_F32,
+        Method::GEOMETRY_IMAGE_F64,
     ] {
         let tracer = method.build(&scene).expect("supported");
         let frame = render(&scene, tracer.as_ref(), &small(), &|_| {});
         let e = compare(&frame, &reference);
-        let bound = if method.name().ends_with("f32") {
+        let bound = if method.precision() == nlrt_render::trace::method::Precision::F32 {
             1e-5
         } else {
             1e-12
@@ -524,7 +524,7 @@ fn curved_shell_mapping_agrees_with_its_own_reference() {
         let curved = render(&scene, &Tessellated::curved(&scene), &small(), &|_| {});
         let bent = compare(&curved, &flat);
         assert!(bent.depth_median > 2e-3, "{}: {bent:?}", scene.name);
-        for method in [Method::CurvedF32, Method::CurvedF64] {
+        for method in [Method::CURVED_F32, Method::CURVED_F64] {
             let tracer = method.build(&scene).expect("height field");
             let frame = render(&scene, tracer.as_ref(), &small(), &|_| {});
             let e = compare(&frame, &curved);
@@ -621,10 +621,10 @@ fn measuring_methods_together_equals_measuring_them_alone() {
     use nlrt_render::lab::watertight::{JudgedHits, measure, measure_all};
     let scene = scenes::torus_scene(64);
     let methods = [
-        Method::NonlinearF32,
-        Method::AffineF64,
-        Method::MarchingF32,
-        Method::NonlinearF64,
+        Method::NONLINEAR_F32,
+        Method::TESSELLATION_FREE_F64,
+        Method::MARCHING_F32,
+        Method::NONLINEAR_F64,
     ];
     let together = measure_all(&scene, 48, &methods, JudgedHits::Every).unwrap();
     assert_eq!(together.len(), methods.len());
@@ -647,7 +647,7 @@ fn measuring_methods_together_equals_measuring_them_alone() {
         measure_all(
             &scene,
             48,
-            &[Method::NonlinearF32, Method::Tessellated],
+            &[Method::NONLINEAR_F32, Method::TESSELLATED_F64],
             JudgedHits::Every
         )
         .is_err()
@@ -666,7 +666,7 @@ fn ghost_tori_hits_are_judged_by_the_oracle() {
     use nlrt_render::lab::watertight::measure;
     for name in scenes::GHOST_SCENES {
         let scene = scenes::builtin(name, scenes::Size::Small).unwrap();
-        for method in [Method::NonlinearF64, Method::NonlinearF32] {
+        for method in [Method::NONLINEAR_F64, Method::NONLINEAR_F32] {
             let report = measure(&scene, 64, method).unwrap();
             let g = report.ghosts.clone().expect("nonlinear hits are judged");
             assert!(
@@ -674,7 +674,7 @@ fn ghost_tori_hits_are_judged_by_the_oracle() {
                 "{name} {method}: {g:?}"
             );
             assert_eq!(report.leaks, 0, "{name} {method}");
-            if method == Method::NonlinearF64 {
+            if method == Method::NONLINEAR_F64 {
                 assert_eq!(
                     (g.ghosts, g.grazing, g.too_far),
                     (0, 0, 0),

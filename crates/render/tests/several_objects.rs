@@ -96,9 +96,9 @@ fn the_objects_traced_as_one_answer_as_each_alone() {
     let second_alone = scene.others[0].clone();
     let first_triangles = scene.triangles.len() as u32;
     for method in [
-        Method::NonlinearF32,
-        Method::NonlinearF64,
-        Method::Tessellated,
+        Method::NONLINEAR_F32,
+        Method::NONLINEAR_F64,
+        Method::TESSELLATED_F64,
     ] {
         let union = method.build(&scene).unwrap();
         let (a, b) = (
@@ -242,7 +242,7 @@ fn a_deformation_moves_every_object() {
         &scene,
         &nlrt_render::lab::animate::AnimateOptions {
             frames: 3,
-            methods: vec![Method::NonlinearF32, Method::NonlinearF64],
+            methods: vec![Method::NONLINEAR_F32, Method::NONLINEAR_F64],
             render: nlrt_render::trace::integrator::RenderOptions {
                 width: 32,
                 height: 24,
@@ -416,7 +416,7 @@ fn the_example_exports_and_reports() {
             height: 24,
             ..Default::default()
         },
-        methods: vec![Method::NonlinearF32, Method::Tessellated],
+        methods: vec![Method::NONLINEAR_F32, Method::TESSELLATED_F64],
         out_dir: Some(report_dir.clone()),
         scaling: false,
         ray_stream: false,

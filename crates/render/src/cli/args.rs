@@ -5,7 +5,7 @@ use clap::{Parser, Subcommand, ValueEnum};
 use nlrt_render::lab::solvers;
 use nlrt_render::scene::scenes::Size;
 use nlrt_render::trace::integrator::RenderOptions;
-use nlrt_render::trace::method::Method;
+use nlrt_render::trace::method::{Kind, Method, Precision};
 use std::path::PathBuf;
 #[derive(Parser)]
 #[command(
@@ -20,43 +20,6 @@ pub struct Cli {
     /// seam walls), to see and measure the cracks the seam rule closes.
     #[arg(long, global = true)]
     pub no_seam_fix: bool,
-}
-
-#[derive(Clone, Copy, Debug, ValueEnum)]
-pub enum Precision {
-    F32,
-    F64,
-}
-
-#[derive(Clone, Copy, Debug, ValueEnum)]
-pub enum MethodKind {
-    /// Nonlinear ray tracing (Ogaki 2023).
-    Nonlinear,
-    /// Tessellation-free displacement mapping (Thonat et al. 2021); height fields only.
-    TessellationFree,
-    /// Geometry-image ray tracing (Carr et al. 2006); height fields on one uv chart only.
-    GeometryImage,
-    /// Smooth shell mapping by ray marching (Jeschke et al. 2007); instanced objects voxelised.
-    Marching,
-    /// Ray marching with Jeschke's 3D distance map (sec. 4.4); instanced objects voxelised.
-    DistanceMap,
-    /// Tetrahedral shells (piecewise-linear mapping); height fields only.
-    Tetrahedra,
-    /// Projective displacement mapping (parallel offset prisms); height fields only.
-    Projective,
-    /// Curved shell mapping (Jeschke et al. 2007, Coons patches); height fields only.
-    Curved,
-    /// Cone tracing with silhouettes, viewing-ray rectification (Ouazzani Chahdi et al.
-    /// 2021); height fields only.
-    ConeRay,
-    /// Cone tracing with silhouettes, cone rectification; height fields only.
-    ConeCone,
-    /// The pre-tessellated microtriangles through Embree 3 (f32; the `embree` feature).
-    Embree,
-    /// The pre-tessellated reference (f64).
-    Tessellated,
-    /// The curved shell's surface pre-tessellated (f64): the curved shell's reference.
-    TessellatedCurved,
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
@@ -197,7 +160,7 @@ pub struct RenderCommand {
     pub precision: Precision,
     /// Intersection method.
     #[arg(long, value_enum, default_value = "nonlinear")]
-    pub method: MethodKind,
+    pub method: Kind,
     #[command(flatten)]
     pub args: RenderArgs,
     /// Output PNG.
@@ -276,7 +239,7 @@ pub struct WatertightCommand {
     pub precision: Option<Precision>,
     /// Method (default: nonlinear and tessellation-free).
     #[arg(long, value_enum)]
-    pub method: Option<MethodKind>,
+    pub method: Option<Kind>,
     /// Map sizes of the built-in scenes.
     #[arg(long, value_enum, default_value = "small")]
     pub scene_size: SceneSize,

@@ -4,7 +4,7 @@ use super::args::*;
 use super::common::*;
 use nlrt_render::lab::report::{self, ReportOptions};
 use nlrt_render::scene::scenes::SCENE_NAMES;
-use nlrt_render::trace::method::Method;
+use nlrt_render::trace::method::{Method, Precision};
 use std::process::ExitCode;
 
 impl RenderCommand {
@@ -22,37 +22,14 @@ impl RenderCommand {
             Ok(s) => s,
             Err(e) => return fail("render", e),
         };
-        let method = match (method, precision) {
-            (MethodKind::Nonlinear, Precision::F32) => Method::NonlinearF32,
-            (MethodKind::Nonlinear, Precision::F64) => Method::NonlinearF64,
-            (MethodKind::TessellationFree, Precision::F32) => Method::AffineF32,
-            (MethodKind::TessellationFree, Precision::F64) => Method::AffineF64,
-            (MethodKind::GeometryImage, Precision::F32) => Method::GeometryImageF32,
-            (MethodKind::GeometryImage, Precision::F64) => Method::GeometryImageF64,
-            (MethodKind::Marching, Precision::F32) => Method::MarchingF32,
-            (MethodKind::Marching, Precision::F64) => Method::MarchingF64,
-            (MethodKind::DistanceMap, Precision::F32) => Method::DistanceMapF32,
-            (MethodKind::DistanceMap, Precision::F64) => Method::DistanceMapF64,
-            (MethodKind::Tetrahedra, Precision::F32) => Method::TetrahedraF32,
-            (MethodKind::Tetrahedra, Precision::F64) => Method::TetrahedraF64,
-            (MethodKind::Projective, Precision::F32) => Method::ProjectiveF32,
-            (MethodKind::Projective, Precision::F64) => Method::ProjectiveF64,
-            (MethodKind::ConeRay, Precision::F32) => Method::ConeRayF32,
-            (MethodKind::ConeRay, Precision::F64) => Method::ConeRayF64,
-            (MethodKind::ConeCone, Precision::F32) => Method::ConeConeF32,
-            (MethodKind::ConeCone, Precision::F64) => Method::ConeConeF64,
-            (MethodKind::Curved, Precision::F32) => Method::CurvedF32,
-            (MethodKind::Curved, Precision::F64) => Method::CurvedF64,
-            (MethodKind::Embree, _) => Method::EmbreeF32,
-            (MethodKind::Tessellated, _) => Method::Tessellated,
-            (MethodKind::TessellatedCurved, _) => Method::TessellatedCurved,
-        };
+        // Embree runs in f32 and the references in f64, whatever `--precision` says.
+        let method = Method::in_precision_or_only(method, precision);
         if let Some(why) = method.unsupported_reason(&built) {
             return fail("render", format!("{method} cannot render {scene}: {why}"));
         }
         // Scene files are checked in f64 when loaded; a value finite in f64 may not be
         // in f32.
-        if method.slug().ends_with("-f32")
+        if method.precision() == Precision::F32
             && let Err(e) = built.check_precision::<f32>()
         {
             return fail("render", format!("{scene}: {e}"));

@@ -4,7 +4,7 @@ use super::args::*;
 use super::common::*;
 use nlrt_render::lab::watertight;
 use nlrt_render::scene::scenes::{self};
-use nlrt_render::trace::method::Method;
+use nlrt_render::trace::method::{Kind, Method, Precision};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -108,7 +108,7 @@ pub fn judge_object(
     header: bool,
     rays: u64,
     precision: Option<Precision>,
-    method: Option<MethodKind>,
+    method: Option<Kind>,
     ghost_samples: Option<u64>,
     frame: Option<u32>,
     frames: u32,
@@ -121,38 +121,10 @@ pub fn judge_object(
     let mut methods = watertight::METHODS
         .into_iter()
         .filter(|m| {
-            let precision_ok = match precision {
-                Some(Precision::F32) => m.name().ends_with("f32"),
-                Some(Precision::F64) => m.name().ends_with("f64"),
-                None => true,
-            };
+            let precision_ok = precision.is_none_or(|p| m.precision() == p);
             let method_ok = match method {
-                Some(MethodKind::Nonlinear) => {
-                    matches!(m, Method::NonlinearF32 | Method::NonlinearF64)
-                }
-                Some(MethodKind::TessellationFree) => {
-                    matches!(m, Method::AffineF32 | Method::AffineF64)
-                }
-                Some(MethodKind::Marching) => {
-                    matches!(m, Method::MarchingF32 | Method::MarchingF64)
-                }
-                Some(MethodKind::DistanceMap) => {
-                    matches!(m, Method::DistanceMapF32 | Method::DistanceMapF64)
-                }
-                Some(MethodKind::Tetrahedra) => {
-                    matches!(m, Method::TetrahedraF32 | Method::TetrahedraF64)
-                }
-                Some(
-                    MethodKind::Tessellated
-                    | MethodKind::Embree
-                    | MethodKind::TessellatedCurved
-                    | MethodKind::GeometryImage
-                    | MethodKind::Projective
-                    | MethodKind::Curved
-                    | MethodKind::ConeRay
-                    | MethodKind::ConeCone,
-                ) => false,
-                None => !shell || matches!(m, Method::NonlinearF32 | Method::NonlinearF64),
+                Some(kind) => m.kind() == kind,
+                None => !shell || m.kind() == Kind::Nonlinear,
             };
             precision_ok && method_ok
         })

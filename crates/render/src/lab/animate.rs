@@ -49,9 +49,9 @@ impl Default for AnimateOptions {
             frames: 16,
             render: RenderOptions::default(),
             methods: vec![
-                Method::NonlinearF32,
-                Method::NonlinearF64,
-                Method::Tessellated,
+                Method::NONLINEAR_F32,
+                Method::NONLINEAR_F64,
+                Method::TESSELLATED_F64,
             ],
             update: TlasUpdate::DEFAULT,
             rebuild_frames: 2,
@@ -166,8 +166,8 @@ pub fn run(scene: &Scene, opts: &AnimateOptions) -> Result<AnimateReport, String
     let mut rows = Vec::new();
     for &method in &opts.methods {
         match method {
-            Method::NonlinearF32 => animate_nonlinear::<f32>(scene, method, opts, &mut rows)?,
-            Method::NonlinearF64 => animate_nonlinear::<f64>(scene, method, opts, &mut rows)?,
+            Method::NONLINEAR_F32 => animate_nonlinear::<f32>(scene, method, opts, &mut rows)?,
+            Method::NONLINEAR_F64 => animate_nonlinear::<f64>(scene, method, opts, &mut rows)?,
             _ => animate_rebuilt(scene, method, opts, &mut rows)?,
         }
     }
@@ -319,7 +319,7 @@ fn animate_rebuilt(
     opts: &AnimateOptions,
     rows: &mut Vec<FrameRow>,
 ) -> Result<(), String> {
-    if method.slug().ends_with("-f32") {
+    if method.precision() == crate::trace::method::Precision::F32 {
         scene.check_precision::<f32>()?;
     }
     for k in 0..opts.frames.min(opts.rebuild_frames) {
@@ -457,11 +457,11 @@ pub fn markdown(report: &AnimateReport) -> String {
     // Against each rebuilt method: how many times faster nonlinear tracing's update is.
     let rebuilt: Vec<&MethodSummary> = summaries
         .iter()
-        .filter(|s| !matches!(s.method, Method::NonlinearF32 | Method::NonlinearF64))
+        .filter(|s| !matches!(s.method, Method::NONLINEAR_F32 | Method::NONLINEAR_F64))
         .collect();
     for n in summaries
         .iter()
-        .filter(|s| matches!(s.method, Method::NonlinearF32 | Method::NonlinearF64))
+        .filter(|s| matches!(s.method, Method::NONLINEAR_F32 | Method::NONLINEAR_F64))
     {
         for r in &rebuilt {
             md.push_str(&format!(

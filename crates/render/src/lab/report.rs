@@ -5,7 +5,7 @@
 use crate::scene::scenes::{Scene, Size};
 use crate::trace::image::write_png;
 use crate::trace::integrator::{Frame, RenderOptions, render, render_recording};
-use crate::trace::method::Method;
+use crate::trace::method::{Kind, Method, Precision};
 use crate::trace::ray_stream::{RayKind, RayStream, Replay, replay};
 use crate::trace::tracer::Tracer;
 use std::fmt::Write as _;
@@ -437,31 +437,28 @@ fn difference_image(a: &Frame, b: &Frame) -> Vec<u8> {
 /// The speed-against-error figure: one colour per method, one point per scene.
 fn speed_against_error_svg(points: &[(Method, String, f64, ErrorStats)]) -> String {
     use crate::lab::plot::{Panel, Point, Series};
-    let color = |m: Method| match m {
-        Method::NonlinearF32 => "#d62728",
-        Method::NonlinearF64 => "#ff9896",
-        Method::AffineF32 => "#1f77b4",
-        Method::AffineF64 => "#aec7e8",
-        Method::GeometryImageF32 => "#9467bd",
-        Method::GeometryImageF64 => "#c5b0d5",
-        Method::MarchingF32 => "#ff7f0e",
-        Method::MarchingF64 => "#ffbb78",
-        Method::DistanceMapF32 => "#7f7f7f",
-        Method::DistanceMapF64 => "#c7c7c7",
-        Method::TetrahedraF32 => "#8c564b",
-        Method::TetrahedraF64 => "#c49c94",
-        Method::ProjectiveF32 => "#e377c2",
-        Method::ProjectiveF64 => "#f7b6d2",
-        Method::ConeRayF32 => "#393b79",
-        Method::ConeRayF64 => "#6b6ecf",
-        Method::ConeConeF32 => "#637939",
-        Method::ConeConeF64 => "#b5cf6b",
-        Method::CurvedF32 => "#17becf",
-        Method::CurvedF64 => "#9edae5",
-        Method::EmbreeF32 => "#000000",
-        Method::EmbreeNativeF32 => "#555555",
-        Method::Tessellated => "#2ca02c",
-        Method::TessellatedCurved => "#bcbd22",
+    let color = |m: Method| {
+        // Per kind a dark colour for f32 and a light one for f64.
+        let [f32_colour, f64_colour] = match m.kind() {
+            Kind::Nonlinear => ["#d62728", "#ff9896"],
+            Kind::TessellationFree => ["#1f77b4", "#aec7e8"],
+            Kind::GeometryImage => ["#9467bd", "#c5b0d5"],
+            Kind::Marching => ["#ff7f0e", "#ffbb78"],
+            Kind::DistanceMap => ["#7f7f7f", "#c7c7c7"],
+            Kind::Tetrahedra => ["#8c564b", "#c49c94"],
+            Kind::Projective => ["#e377c2", "#f7b6d2"],
+            Kind::ConeRay => ["#393b79", "#6b6ecf"],
+            Kind::ConeCone => ["#637939", "#b5cf6b"],
+            Kind::Curved => ["#17becf", "#9edae5"],
+            Kind::Embree => ["#000000"; 2],
+            Kind::EmbreeNative => ["#555555"; 2],
+            Kind::Tessellated => ["#2ca02c"; 2],
+            Kind::TessellatedCurved => ["#bcbd22"; 2],
+        };
+        match m.precision() {
+            Precision::F32 => f32_colour,
+            Precision::F64 => f64_colour,
+        }
     };
     let series = |metric: &dyn Fn(&ErrorStats) -> f64| -> Vec<Series> {
         Method::ALL

@@ -23,7 +23,7 @@
 //! points of the object instead (see the `shell` submodule), for nonlinear tracing.
 
 use crate::scene::scenes::{Content, Scene};
-use crate::trace::method::Method;
+use crate::trace::method::{Kind, Method, Precision};
 use crate::trace::methods::Nonlinear;
 use nlrt_accel::{Aabb, Bvh4, SlabRay, TraversalStats, Wrap};
 use nlrt_baselines::{AffineTracing as _, MarchOptions, Marching as _, TetrahedralShells as _};
@@ -47,16 +47,16 @@ pub const LEAK_TOLERANCE: f64 = 1e-4;
 
 /// The methods whose leaks are measured, in report order.
 pub const METHODS: [Method; 10] = [
-    Method::NonlinearF32,
-    Method::NonlinearF64,
-    Method::AffineF32,
-    Method::AffineF64,
-    Method::MarchingF32,
-    Method::MarchingF64,
-    Method::DistanceMapF32,
-    Method::DistanceMapF64,
-    Method::TetrahedraF32,
-    Method::TetrahedraF64,
+    Method::NONLINEAR_F32,
+    Method::NONLINEAR_F64,
+    Method::TESSELLATION_FREE_F32,
+    Method::TESSELLATION_FREE_F64,
+    Method::MARCHING_F32,
+    Method::MARCHING_F64,
+    Method::DISTANCE_MAP_F32,
+    Method::DISTANCE_MAP_F64,
+    Method::TETRAHEDRA_F32,
+    Method::TETRAHEDRA_F64,
 ];
 
 /// The outcome for one ray.
@@ -454,7 +454,7 @@ pub fn measure_all_at_frame(
     for &method in methods {
         judged_precision(method)?;
         if matches!(scene.content, Content::Shell(_))
-            && !matches!(method, Method::NonlinearF32 | Method::NonlinearF64)
+            && !matches!(method, Method::NONLINEAR_F32 | Method::NONLINEAR_F64)
         {
             return Err(format!(
                 "{method}: scene '{}' is shell-mapped; its watertightness is measured for \
@@ -494,40 +494,15 @@ pub fn measure_all_at_frame(
         .collect())
 }
 
-/// The precisions a measurement runs in.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Precision {
-    F32,
-    F64,
-}
-
 /// The precision `method` is judged in, or why it is not judged.
 fn judged_precision(method: Method) -> Result<Precision, String> {
-    match method {
-        Method::NonlinearF32
-        | Method::AffineF32
-        | Method::MarchingF32
-        | Method::DistanceMapF32
-        | Method::TetrahedraF32 => Ok(Precision::F32),
-        Method::NonlinearF64
-        | Method::AffineF64
-        | Method::MarchingF64
-        | Method::DistanceMapF64
-        | Method::TetrahedraF64 => Ok(Precision::F64),
-        Method::Tessellated
-        | Method::EmbreeF32
-        | Method::EmbreeNativeF32
-        | Method::TessellatedCurved
-        | Method::GeometryImageF32
-        | Method::GeometryImageF64
-        | Method::ProjectiveF32
-        | Method::ProjectiveF64
-        | Method::CurvedF32
-        | Method::CurvedF64
-        | Method::ConeRayF32
-        | Method::ConeRayF64
-        | Method::ConeConeF32
-        | Method::ConeConeF64 => Err(format!(
+    match method.kind() {
+        Kind::Nonlinear
+        | Kind::TessellationFree
+        | Kind::Marching
+        | Kind::DistanceMap
+        | Kind::Tetrahedra => Ok(method.precision()),
+        _ => Err(format!(
             "{method}: watertightness is measured for nonlinear and tessellation-free tracing \
              and the smooth and tetrahedral shells (the references and geometry images are \
              other surfaces: flat triangles through re-sampled points, which need not lie above \
@@ -663,10 +638,13 @@ fn measure_in<T: Real>(
     let decisions = decide(scene, surface, n);
     let mut reports = Vec::with_capacity(methods.len());
     for &method in methods {
-        let affine = matches!(method, Method::AffineF32 | Method::AffineF64);
-        let marching = matches!(method, Method::MarchingF32 | Method::MarchingF64);
-        let tetrahedra = matches!(method, Method::TetrahedraF32 | Method::TetrahedraF64);
-        let map = matches!(method, Method::DistanceMapF32 | Method::DistanceMapF64)
+        let affine = matches!(
+            method,
+            Method::TESSELLATION_FREE_F32 | Method::TESSELLATION_FREE_F64
+        );
+        let marching = matches!(method, Method::MARCHING_F32 | Method::MARCHING_F64);
+        let tetrahedra = matches!(method, Method::TETRAHEDRA_F32 | Method::TETRAHEDRA_F64);
+        let map = matches!(method, Method::DISTANCE_MAP_F32 | Method::DISTANCE_MAP_F64)
             .then(|| crate::trace::methods::distance_map_of(surface.field()));
         let verdicts: Vec<Verdict> = (0..n * n)
             .into_par_iter()

@@ -992,7 +992,7 @@ mod tests {
             let reports = super::super::measure_all(
                 &scene,
                 32,
-                &[Method::NonlinearF32, Method::NonlinearF64],
+                &[Method::NONLINEAR_F32, Method::NONLINEAR_F64],
                 JudgedHits::Spaced {
                     ghosts: 256,
                     distances: 0,
