@@ -245,6 +245,14 @@ impl<T: Real> ObjectEdges<T> {
 /// an `f32` surface traced in `f64`: each plane is widened exactly where it is used, so the
 /// two triangles of an edge still see the same plane).
 impl<S: Real> ObjectEdges<S> {
+    /// Per edge of triangle `k`, its index in `edges`, or [`NONE`].
+    fn shared_edges(&self, k: u32) -> [u32; 3] {
+        self.of_triangle
+            .get(k as usize)
+            .copied()
+            .unwrap_or([NONE; 3])
+    }
+
     /// The nearest hit with `t` in `[t_min, t_max]` of `ray` (in `prism`) on object triangle
     /// `k`, placed in `tile` as `tri` (`placed` gives any triangle of the object in the same
     /// tile: the neighbours' planes), watertight across its shared edges (see the module),
@@ -281,11 +289,7 @@ impl<S: Real> ObjectEdges<S> {
         if !near_shared_edge {
             return best;
         }
-        let shared = self
-            .of_triangle
-            .get(k as usize)
-            .copied()
-            .unwrap_or([NONE; 3]);
+        let shared = self.shared_edges(k);
         for edge in shared.iter().filter_map(|&e| self.edges.get(e as usize)) {
             let other = if edge.triangles[0] == k {
                 edge.triangles[1]
@@ -332,11 +336,7 @@ impl<S: Real> ObjectEdges<S> {
         // The triangle's orientation in the projection (the sign of its 2D area there, the
         // normal's component on the dropped axis): inside is where every edge function has it.
         let orientation = T::ONE.copysign(plane.normal.get(axis));
-        let shared = self
-            .of_triangle
-            .get(k as usize)
-            .copied()
-            .unwrap_or([NONE; 3]);
+        let shared = self.shared_edges(k);
         let reversed = self.reversed.get(k as usize).copied().unwrap_or(0);
         let lo = tri[0].z().min(tri[1].z()).min(tri[2].z());
         let hi = tri[0].z().max(tri[1].z()).max(tri[2].z());
@@ -472,11 +472,7 @@ impl<S: Real> ObjectEdges<S> {
         t_max: T,
         placed: &impl Fn(u32) -> Option<[T::Vec3; 3]>,
     ) -> Option<Hit<T>> {
-        let shared = self
-            .of_triangle
-            .get(k as usize)
-            .copied()
-            .unwrap_or([NONE; 3]);
+        let shared = self.shared_edges(k);
         // The curve's poles in the object's heights (the same numbers in every triangle).
         let poles = solve_quadratic_in(ray.d, T::ZERO, T::ONE);
         let sides: [Option<Side<T>>; 3] = core::array::from_fn(|e| {

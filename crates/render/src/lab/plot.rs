@@ -1,28 +1,43 @@
 //! SVG scatter plots with logarithmic axes for the report's speed-against-error figure, drawn
-//! by `plotters` (SVG backend): panels side by side, one colour per series, a label beside
-//! each point, the legend below.
+//! by `plotters` (SVG backend): small multiples (one panel per scene, in rows), one colour
+//! per series and a marker per precision, each panel's Pareto front joined, one legend below
+//! them all.
 
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-/// One point: position and a short label drawn beside it.
+/// One point: position and an optional short label drawn beside it.
 #[derive(Clone, Debug)]
 pub struct Point {
     /// Horizontal value (> 0; log axis).
     pub x: f64,
     /// Vertical value; values at or below the axis floor are drawn on the floor line.
     pub y: f64,
-    /// Label.
+    /// Label (empty: none).
     pub label: String,
 }
 
-/// Points drawn in one colour with one legend entry.
+/// How a series' points are drawn.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Marker {
+    /// A filled circle.
+    Circle,
+    /// A filled square.
+    Square,
+}
+
+/// Points drawn in one colour and marker.
 #[derive(Clone, Debug)]
 pub struct Series {
-    /// Legend name.
+    /// Name (the legend's entries are given apart, [`svg`]).
     pub name: String,
     /// CSS colour.
     pub color: &'static str,
+    /// Marker.
+    pub marker: Marker,
+    /// Whether its points take part in the panel's Pareto front (a reference, whose error is
+    /// zero by definition, does not).
+    pub on_front: bool,
     /// Points.
     pub points: Vec<Point>,
 }
@@ -41,12 +56,32 @@ pub struct Panel {
     pub y_floor: f64,
     /// Series.
     pub series: Vec<Series>,
+    /// Whether to join the panel's Pareto front: of the series [`Series::on_front`], the
+    /// points no other point beats on both axes at once (larger `x`, smaller `y`), in order
+    /// of `x`.
+    pub pareto: bool,
 }
 
+/// One entry of the legend below the panels.
+#[derive(Clone, Debug)]
+pub struct LegendEntry {
+    /// Text.
+    pub name: String,
+    /// CSS colour.
+    pub color: &'static str,
+    /// Marker.
+    pub marker: Marker,
+}
+
+/// The Pareto front's colour (dark grey: beside the series' colours, not one of them).
+const FRONT: RGBColor = RGBColor(0x33, 0x33, 0x33);
+
 /// Width and height of one panel, in pixels.
-const PANEL: (u32, u32) = (520, 380);
-/// Height of one legend row (three entries a row).
+const PANEL: (u32, u32) = (400, 300);
+/// Height of one legend row.
 const LEGEND_ROW: u32 = 22;
+/// Legend entries per row.
+const LEGEND_COLUMNS: usize = 4;
 
 /// Decades `[lo, hi]` covering the finite positive values (those at or below `floor` counted
 /// as `floor`), at least one wide.
@@ -86,25 +121,40 @@ fn rgb(css: &str) -> RGBColor {
     }
 }
 
-/// Panels side by side as one SVG document (the legend, from the first panel's series,
-/// below them).
+/// The Pareto front of `points` (`x` to maximise, `y` to minimise, `y` below `floor` taken as
+/// `floor`), in increasing `x`: a point is on it when every point with a larger `x` has a
+/// larger `y`.
 #[must_use]
-pub fn svg(panels: &[Panel]) -> String {
-    let legend: Vec<(&str, &str)> = panels
-        .first()
-        .map(|p| {
-            p.series
-                .iter()
-                .map(|s| (s.name.as_str(), s.color))
-                .collect()
-        })
-        .unwrap_or_default();
-    let legend_h = LEGEND_ROW * legend.len().div_ceil(3) as u32 + 10;
-    let size = (PANEL.0 * panels.len().max(1) as u32, PANEL.1 + legend_h);
+pub fn pareto_front(points: &[(f64, f64)], floor: f64) -> Vec<(f64, f64)> {
+    let mut sorted: Vec<(f64, f64)> = points
+        .iter()
+        .filter(|p| p.0 > 0.0 && p.0.is_finite() && !p.1.is_nan())
+        .map(|&(x, y)| (x, y.max(floor)))
+        .collect();
+    sorted.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.total_cmp(&b.1)));
+    let mut front = Vec::new();
+    let mut best = f64::INFINITY;
+    for p in sorted {
+        if p.1 < best {
+            best = p.1;
+            front.push(p);
+        }
+    }
+    front.reverse();
+    front
+}
+
+/// Panels in rows of `columns` as one SVG document, `legend` below them.
+#[must_use]
+pub fn svg(panels: &[Panel], columns: usize, legend: &[LegendEntry]) -> String {
+    let columns = columns.clamp(1, panels.len().max(1));
+    let rows = panels.len().div_ceil(columns).max(1);
+    let legend_h = LEGEND_ROW * legend.len().div_ceil(LEGEND_COLUMNS) as u32 + 10;
+    let size = (PANEL.0 * columns as u32, PANEL.1 * rows as u32 + legend_h);
     let mut out = String::new();
     // Drawing into a String cannot fail for I/O; an error would mean a plotters bug, and the
     // report then carries a note instead of the figure.
-    if let Err(e) = draw(&mut out, size, panels, &legend) {
+    if let Err(e) = draw(&mut out, size, panels, (rows, columns), legend) {
         return format!(
             "<svg xmlns=\"http://www.w3.org/2000/svg\"><text y=\"20\">plot failed: {e}</text></svg>\n"
         );
@@ -112,27 +162,46 @@ pub fn svg(panels: &[Panel]) -> String {
     out
 }
 
+/// A marker of `color` centred at `at` (pixels, in `area`).
+fn marker_at(
+    area: &DrawingArea<SVGBackend<'_>, Shift>,
+    marker: Marker,
+    at: (i32, i32),
+    color: RGBColor,
+) -> Result<(), Box<dyn std::error::Error>> {
+    match marker {
+        Marker::Circle => area.draw(&Circle::new(at, 5, color.filled()))?,
+        Marker::Square => area.draw(&Rectangle::new(
+            [(at.0 - 4, at.1 - 4), (at.0 + 4, at.1 + 4)],
+            color.filled(),
+        ))?,
+    }
+    Ok(())
+}
+
 fn draw(
     out: &mut String,
     size: (u32, u32),
     panels: &[Panel],
-    legend: &[(&str, &str)],
+    grid: (usize, usize),
+    legend: &[LegendEntry],
 ) -> Result<(), Box<dyn std::error::Error>> {
     let root = SVGBackend::with_string(out, size).into_drawing_area();
     root.fill(&WHITE)?;
-    let (upper, lower) = root.split_vertically(PANEL.1);
-    let areas = upper.split_evenly((1, panels.len().max(1)));
+    let (upper, lower) = root.split_vertically(PANEL.1 * grid.0 as u32);
+    let areas = upper.split_evenly(grid);
     for (panel, area) in panels.iter().zip(&areas) {
         draw_panel(panel, area)?;
     }
-    for (k, (name, color)) in legend.iter().enumerate() {
+    let column_width = (size.0 as usize / LEGEND_COLUMNS).max(1) as i32;
+    for (k, entry) in legend.iter().enumerate() {
         let (x, y) = (
-            70 + 160 * (k % 3) as i32,
-            16 + LEGEND_ROW as i32 * (k / 3) as i32,
+            20 + column_width * (k % LEGEND_COLUMNS) as i32,
+            16 + LEGEND_ROW as i32 * (k / LEGEND_COLUMNS) as i32,
         );
-        lower.draw(&Circle::new((x, y), 5, rgb(color).filled()))?;
+        marker_at(&lower, entry.marker, (x, y), rgb(entry.color))?;
         lower.draw(&Text::new(
-            name.to_string(),
+            entry.name.clone(),
             (x + 10, y - 6),
             ("sans-serif", 11),
         ))?;
@@ -154,9 +223,9 @@ fn draw_panel(
     );
     let mut chart = ChartBuilder::on(area)
         .caption(&panel.title, ("sans-serif", 13))
-        .margin(16)
-        .x_label_area_size(40)
-        .y_label_area_size(60)
+        .margin(12)
+        .x_label_area_size(36)
+        .y_label_area_size(56)
         .build_cartesian_2d(x_range.log_scale(), y_range.log_scale())?;
     let floor = panel.y_floor;
     chart
@@ -167,17 +236,38 @@ fn draw_panel(
         .x_label_formatter(&|v| format!("{v:.0e}"))
         .y_label_formatter(&|v| format!("{v:.0e}"))
         .draw()?;
+    if panel.pareto {
+        let all: Vec<(f64, f64)> = panel
+            .series
+            .iter()
+            .filter(|s| s.on_front)
+            .flat_map(|s| s.points.iter().map(|p| (p.x, p.y)))
+            .collect();
+        let front = pareto_front(&all, floor);
+        if front.len() > 1 {
+            chart.draw_series(LineSeries::new(front, FRONT.stroke_width(2)))?;
+        }
+    }
     for s in &panel.series {
-        let color = rgb(s.color);
+        let color = rgb(s.color).mix(0.85);
         let shown = s
             .points
             .iter()
             .filter(|p| p.x > 0.0 && p.x.is_finite() && !p.y.is_nan());
-        chart.draw_series(shown.map(|p| {
-            EmptyElement::at((p.x, p.y.max(floor)))
-                + Circle::new((0, 0), 5, color.mix(0.8).filled())
-                + Text::new(p.label.clone(), (7, -12), ("sans-serif", 9))
-        }))?;
+        for p in shown {
+            let at = (p.x, p.y.max(floor));
+            let label = Text::new(p.label.clone(), (7, -12), ("sans-serif", 9));
+            match s.marker {
+                Marker::Circle => chart.draw_series(std::iter::once(
+                    EmptyElement::at(at) + Circle::new((0, 0), 5, color.filled()) + label,
+                ))?,
+                Marker::Square => chart.draw_series(std::iter::once(
+                    EmptyElement::at(at)
+                        + Rectangle::new([(-4, -4), (4, 4)], color.filled())
+                        + label,
+                ))?,
+            };
+        }
     }
     Ok(())
 }
@@ -209,9 +299,12 @@ mod tests {
             x_label: "x".into(),
             y_label: "y".into(),
             y_floor: 1e-9,
+            pareto: false,
             series: vec![Series {
                 name: "a<b".into(),
                 color: "#d62728",
+                marker: Marker::Circle,
+                on_front: true,
                 points: vec![
                     Point {
                         x: 0.3,
@@ -231,7 +324,12 @@ mod tests {
                 ],
             }],
         };
-        let doc = svg(&[panel]);
+        let legend = [LegendEntry {
+            name: "a<b".into(),
+            color: "#d62728",
+            marker: Marker::Circle,
+        }];
+        let doc = svg(&[panel], 3, &legend);
         assert!(
             doc.starts_with("<svg") && doc.trim_end().ends_with("</svg>"),
             "{doc}"
@@ -251,6 +349,83 @@ mod tests {
             drawn[0].1 > drawn[1].1 && drawn[0].0 < drawn[1].0,
             "{drawn:?}"
         );
+    }
+
+    /// The front keeps the points no other beats on both axes, in increasing speed; zeros
+    /// count as the floor; small multiples put a square per f64 point and join the front.
+    #[test]
+    fn the_pareto_front_is_joined_and_markers_follow_the_series() {
+        let pts = [
+            (1.0, 1e-3),
+            (2.0, 1e-5),
+            (3.0, 1e-4),
+            (0.5, 0.0),
+            (4.0, 1e-2),
+            (2.5, 1e-5),
+        ];
+        assert_eq!(
+            pareto_front(&pts, 1e-9),
+            vec![(0.5, 1e-9), (2.5, 1e-5), (3.0, 1e-4), (4.0, 1e-2)]
+        );
+        let panel = |title: &str| Panel {
+            title: title.into(),
+            x_label: "x".into(),
+            y_label: "y".into(),
+            y_floor: 1e-9,
+            pareto: true,
+            series: vec![
+                Series {
+                    name: "a f32".into(),
+                    color: "#d62728",
+                    marker: Marker::Circle,
+                    on_front: true,
+                    points: pts[..3]
+                        .iter()
+                        .map(|&(x, y)| Point {
+                            x,
+                            y,
+                            label: String::new(),
+                        })
+                        .collect(),
+                },
+                Series {
+                    name: "a f64".into(),
+                    color: "#1f77b4",
+                    marker: Marker::Square,
+                    on_front: true,
+                    points: pts[3..]
+                        .iter()
+                        .map(|&(x, y)| Point {
+                            x,
+                            y,
+                            label: String::new(),
+                        })
+                        .collect(),
+                },
+            ],
+        };
+        let doc = svg(
+            &[panel("one"), panel("two"), panel("three"), panel("four")],
+            3,
+            &[],
+        );
+        assert!(!doc.contains("plot failed"), "{doc}");
+        assert_eq!(
+            circles(&doc, "#D62728").len(),
+            4 * 3,
+            "three circles a panel"
+        );
+        let squares = doc.matches("<rect").filter(|r| r.is_empty()).count();
+        let blue_rects = doc
+            .split("<rect")
+            .filter(|r| r.to_ascii_uppercase().contains("FILL=\"#1F77B4\""))
+            .count();
+        assert_eq!(blue_rects, 4 * 3, "three squares a panel ({squares})");
+        let fronts = doc
+            .split("<polyline")
+            .filter(|l| l.to_ascii_uppercase().contains("STROKE=\"#333333\""))
+            .count();
+        assert_eq!(fronts, 4, "one front a panel");
     }
 
     #[test]

@@ -434,9 +434,11 @@ fn difference_image(a: &Frame, b: &Frame) -> Vec<u8> {
     out
 }
 
-/// The speed-against-error figure: one colour per method, one point per scene.
+/// The speed-against-error figure: small multiples, one panel per scene (depth error p99
+/// against Mrays/s), a colour per kind of method, a circle for f32 and a square for f64, the
+/// Pareto front of the methods that are not references joined.
 fn speed_against_error_svg(points: &[(Method, String, f64, ErrorStats)]) -> String {
-    use crate::lab::plot::{Panel, Point, Series};
+    use crate::lab::plot::{LegendEntry, Marker, Panel, Point, Series};
     let color = |m: Method| {
         // Per kind a dark colour for f32 and a light one for f64.
         let [f32_colour, f64_colour] = match m.kind() {
@@ -460,41 +462,72 @@ fn speed_against_error_svg(points: &[(Method, String, f64, ErrorStats)]) -> Stri
             Precision::F64 => f64_colour,
         }
     };
-    let series = |metric: &dyn Fn(&ErrorStats) -> f64| -> Vec<Series> {
-        Method::ALL
-            .into_iter()
-            .filter(|m| points.iter().any(|p| p.0 == *m))
-            .map(|m| Series {
-                name: m.name().to_string(),
-                color: color(m),
-                points: points
-                    .iter()
-                    .filter(|p| p.0 == m)
-                    .map(|p| Point {
-                        x: p.2,
-                        y: metric(&p.3),
-                        label: p.1.clone(),
-                    })
-                    .collect(),
-            })
-            .collect()
+    let methods: Vec<Method> = Method::ALL
+        .into_iter()
+        .filter(|m| points.iter().any(|p| p.0 == *m))
+        .collect();
+    let marker = |m: Method| match m.precision() {
+        Precision::F32 => Marker::Circle,
+        Precision::F64 => Marker::Square,
     };
-    crate::lab::plot::svg(&[
-        Panel {
-            title: "depth error vs reference".into(),
+    // One panel per scene, in the order the scenes ran.
+    let mut scenes: Vec<&str> = Vec::new();
+    for p in points {
+        if !scenes.contains(&p.1.as_str()) {
+            scenes.push(&p.1);
+        }
+    }
+    let panels: Vec<Panel> = scenes
+        .iter()
+        .map(|&scene| Panel {
+            title: scene.to_string(),
             x_label: "Mrays/s (all rays)".into(),
-            y_label: "relative depth error, p99".into(),
+            y_label: "depth error, p99".into(),
             y_floor: 1e-17,
-            series: series(&|e| e.depth_p99),
-        },
-        Panel {
-            title: "hit/miss mismatches vs reference".into(),
-            x_label: "Mrays/s (all rays)".into(),
-            y_label: "mismatch rate".into(),
-            y_floor: 1e-6,
-            series: series(&|e| e.mismatch_rate()),
-        },
-    ])
+            pareto: true,
+            series: methods
+                .iter()
+                .map(|&m| Series {
+                    name: m.name().to_string(),
+                    color: color(m),
+                    marker: marker(m),
+                    on_front: !m.is_reference(),
+                    points: points
+                        .iter()
+                        .filter(|p| p.0 == m && p.1 == scene)
+                        .map(|p| Point {
+                            x: p.2,
+                            y: p.3.depth_p99,
+                            label: String::new(),
+                        })
+                        .collect(),
+                })
+                .collect(),
+        })
+        .collect();
+    // The legend: one colour per kind (f32's), then the two markers.
+    let mut legend: Vec<LegendEntry> = Vec::new();
+    for &m in &methods {
+        let name = m.name().trim_end_matches(" f32").trim_end_matches(" f64");
+        if !legend.iter().any(|e| e.name == name) {
+            legend.push(LegendEntry {
+                name: name.to_string(),
+                color: color(Method::in_precision_or_only(m.kind(), Precision::F32)),
+                marker: Marker::Circle,
+            });
+        }
+    }
+    for (name, marker) in [
+        ("f32: circle (dark)", Marker::Circle),
+        ("f64: square (light)", Marker::Square),
+    ] {
+        legend.push(LegendEntry {
+            name: name.into(),
+            color: "#444444",
+            marker,
+        });
+    }
+    crate::lab::plot::svg(&panels, 3, &legend)
 }
 
 /// Runs every scene and writes images (when `out_dir` is set); returns the Markdown tables.

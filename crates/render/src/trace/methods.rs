@@ -1,7 +1,7 @@
 //! The tracers behind [`Tracer`]: nonlinear ray tracing (displacement and shell mapping) and
 //! each compared method of `nlrt-baselines`, set up from a [`Scene`] and traced in their
 //! own precision (`f32` or `f64`). The pre-tessellated reference lives in `tessellate`,
-//! geometry images in `resample`, Embree in `embree_reference`; [`crate::trace::method::Method`]
+//! geometry images in `geometry_image`, Embree in `embree_reference`; [`crate::trace::method::Method`]
 //! names them all.
 
 use crate::scene::material::Rng;
