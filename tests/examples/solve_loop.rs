@@ -32,7 +32,7 @@ fn run<T: Real>(closed: bool, whole_line: bool) {
         for c in &cases {
             let c = std::hint::black_box(*c);
             n += if closed {
-                nlrt_poly::baseline::solve_cubic_closed_form_in(c, lo, hi).len()
+                nlrt_poly::closed_form::solve_cubic_closed_form_in(c, lo, hi).len()
             } else {
                 nlrt_poly::solve_cubic_in(c, lo, hi).len()
             };

@@ -12,7 +12,7 @@
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use nlrt_oracle::families::{RandomFamily, SplitMix64, cubic_from_roots};
 use nlrt_oracle::peers;
-use nlrt_poly::baseline::solve_cubic_closed_form_in;
+use nlrt_poly::closed_form::solve_cubic_closed_form_in;
 use nlrt_poly::{
     CUBIC_BATCH, QUADRATIC_BATCH, Real, Roots, first_cubic_root_batch_in, first_cubic_root_in,
     solve_cubic_in, solve_cubics_in, solve_quadratic, solve_quadratic_batch_in, solve_quadratic_in,

@@ -37,8 +37,8 @@ compile_error!("nlrt-poly needs the `std` or the `libm` feature for sqrt, cbrt a
 #[cfg(feature = "std")]
 extern crate std;
 
-pub mod baseline;
 mod batch;
+pub mod closed_form;
 mod cubic;
 mod eval;
 mod lanes;

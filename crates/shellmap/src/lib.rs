@@ -29,14 +29,14 @@
 #[cfg(not(any(feature = "std", feature = "libm")))]
 compile_error!("nlrt-shellmap needs the `std` or the `libm` feature");
 
-mod aabb;
+mod curve_box;
 mod curved;
 mod microtriangle;
 mod prism;
 mod prism_hit;
 mod ray;
 
-pub use aabb::{BoxSpan, TextureCurve, intersect_box};
+pub use curve_box::{BoxSpan, TextureCurve, intersect_box};
 pub use curved::coons_displacement;
 pub use microtriangle::{
     Hit, TexturePlane, alpha_beta_eq11, facing_unit, inside_triangle, intersect_flat_microtriangle,

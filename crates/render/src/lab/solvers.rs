@@ -3,7 +3,7 @@
 
 use nlrt_oracle::families::{Case, RandomFamily, SplitMix64, hard_cubics};
 use nlrt_oracle::{Tolerance, Truth, Verdict, peers};
-use nlrt_poly::baseline::solve_cubic_closed_form_in;
+use nlrt_poly::closed_form::solve_cubic_closed_form_in;
 use nlrt_poly::{Real, Roots, solve_cubic_in};
 use rayon::prelude::*;
 use std::fmt::Write as _;

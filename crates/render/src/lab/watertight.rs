@@ -61,7 +61,7 @@ pub const METHODS: [Method; 10] = [
 
 /// The outcome for one ray.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Verdict {
+pub enum RayVerdict {
     /// The ray does not reach a base triangle from outside: no claim.
     NotDecided,
     /// Reaches the base and the tracer hit no farther than the crossing.
@@ -82,8 +82,8 @@ pub struct LeakReport {
     pub decided: usize,
     /// Leaks among them.
     pub leaks: usize,
-    /// Verdict per pixel (row-major), for the leak image.
-    pub verdicts: Vec<Verdict>,
+    /// RayVerdict per pixel (row-major), for the leak image.
+    pub verdicts: Vec<RayVerdict>,
     /// Hit distances against the oracle (nonlinear tracing only).
     pub distance_error: Option<DistanceError>,
     /// Every hit judged against the oracle (nonlinear tracing only: the other methods trace
@@ -646,15 +646,15 @@ fn measure_in<T: Real>(
         let tetrahedra = matches!(method, Method::TETRAHEDRA_F32 | Method::TETRAHEDRA_F64);
         let map = matches!(method, Method::DISTANCE_MAP_F32 | Method::DISTANCE_MAP_F64)
             .then(|| crate::trace::methods::distance_map_of(surface.field()));
-        let verdicts: Vec<Verdict> = (0..n * n)
+        let verdicts: Vec<RayVerdict> = (0..n * n)
             .into_par_iter()
             .map(|k| {
                 let (x, y) = ((k % n) as f64 + 0.5, (k / n) as f64 + 0.5);
                 let Some((t_base, base_triangle)) = decisions[k] else {
-                    return Verdict::NotDecided;
+                    return RayVerdict::NotDecided;
                 };
                 let Some(ray) = grid_ray::<T>(scene, n, k) else {
-                    return Verdict::NotDecided;
+                    return RayVerdict::NotDecided;
                 };
             let mut stats = TraversalStats::default();
             let hit = if tetrahedra {
@@ -692,7 +692,7 @@ fn measure_in<T: Real>(
                     .map(|h| (h.hit.t, h.triangle, h.texel, h.part, h.hit.h))
             };
             match hit {
-                Some(h) if h.0.to_f64() <= t_base * (1.0 + LEAK_TOLERANCE) => Verdict::Hit,
+                Some(h) if h.0.to_f64() <= t_base * (1.0 + LEAK_TOLERANCE) => RayVerdict::Hit,
                 _ => {
                     if std::env::var_os("NLRT_SHOW_LEAKS").is_some() {
                         let (edge, seam) = nearest_edge(surface, &ray, t_base, base_triangle);
@@ -702,18 +702,18 @@ fn measure_in<T: Real>(
                             hit.map(|h| (h.0.to_f64(), h.1, h.2, h.3, h.4.to_f64()))
                         );
                     }
-                    Verdict::Leak(base_triangle as u32)
+                    RayVerdict::Leak(base_triangle as u32)
                 }
             }
         })
         .collect();
         let decided = verdicts
             .iter()
-            .filter(|v| **v != Verdict::NotDecided)
+            .filter(|v| **v != RayVerdict::NotDecided)
             .count();
         let mut leak_edges: Vec<LeakEdge> = Vec::new();
         for (k, v) in verdicts.iter().enumerate() {
-            let (Verdict::Leak(triangle), Some((t_base, _)), Some(ray)) =
+            let (RayVerdict::Leak(triangle), Some((t_base, _)), Some(ray)) =
                 (v, decisions[k], grid_ray::<T>(scene, n, k))
             else {
                 continue;
@@ -724,7 +724,7 @@ fn measure_in<T: Real>(
         leak_edges.sort_by(|a, b| b.leaks.cmp(&a.leaks).then(a.triangle.cmp(&b.triangle)));
         let leaks = verdicts
             .iter()
-            .filter(|v| matches!(v, Verdict::Leak(_)))
+            .filter(|v| matches!(v, RayVerdict::Leak(_)))
             .count();
         let nonlinear = !(affine || marching || tetrahedra || map.is_some());
         let truth = nonlinear.then(|| (TrueSurface::new(surface), grid_hits(scene, surface, n)));
@@ -910,7 +910,7 @@ impl LeakReport {
     pub fn leaks_by_triangle(&self) -> Vec<(u32, usize)> {
         let mut counts = std::collections::BTreeMap::new();
         for v in &self.verdicts {
-            if let Verdict::Leak(t) = v {
+            if let RayVerdict::Leak(t) = v {
                 *counts.entry(*t).or_insert(0) += 1;
             }
         }
@@ -926,9 +926,9 @@ pub fn leak_image(report: &LeakReport) -> Vec<u8> {
         .verdicts
         .iter()
         .flat_map(|v| match v {
-            Verdict::NotDecided => [0, 0, 0],
-            Verdict::Hit => [150, 150, 150],
-            Verdict::Leak(_) => [255, 0, 0],
+            RayVerdict::NotDecided => [0, 0, 0],
+            RayVerdict::Hit => [150, 150, 150],
+            RayVerdict::Leak(_) => [255, 0, 0],
         })
         .collect();
     for &cell in report.ghosts.iter().flat_map(|g| &g.ghost_cells) {

@@ -23,7 +23,7 @@
 
 use super::{
     DistanceError, GhostCount, HitJudgement, JudgedHits, LEAK_TOLERANCE, LeakEdge, LeakReport,
-    Verdict, count_leak, oracle_scene, shell_point_on_ray, spacing, to_f64, vertex_neighbours,
+    RayVerdict, count_leak, oracle_scene, shell_point_on_ray, spacing, to_f64, vertex_neighbours,
 };
 use crate::scene::scenes::Scene;
 use crate::trace::method::Method;
@@ -549,7 +549,7 @@ pub(super) fn measure<T: Real>(
         .into_par_iter()
         .map(|k| aim(surface, &truth, &open_edges, eye, k))
         .collect();
-    let verdicts: Vec<Verdict> = aimed
+    let verdicts: Vec<RayVerdict> = aimed
         .iter()
         .enumerate()
         .map(|(k, a)| {
@@ -560,10 +560,10 @@ pub(super) fn measure<T: Real>(
                 ..
             }) = a
             else {
-                return Verdict::NotDecided;
+                return RayVerdict::NotDecided;
             };
             match hit {
-                Some(h) if h.hit.t.to_f64() <= t_true * (1.0 + LEAK_TOLERANCE) => Verdict::Hit,
+                Some(h) if h.hit.t.to_f64() <= t_true * (1.0 + LEAK_TOLERANCE) => RayVerdict::Hit,
                 _ => {
                     if show {
                         eprintln!(
@@ -585,14 +585,14 @@ pub(super) fn measure<T: Real>(
                             );
                         }
                     }
-                    Verdict::Leak(target.base as u32)
+                    RayVerdict::Leak(target.base as u32)
                 }
             }
         })
         .collect();
     let mut leak_edges: Vec<LeakEdge> = Vec::new();
     for (v, a) in verdicts.iter().zip(&aimed) {
-        let (Verdict::Leak(triangle), Some(a)) = (v, a) else {
+        let (RayVerdict::Leak(triangle), Some(a)) = (v, a) else {
             continue;
         };
         let edge = nearest_base_edge(a.target.alpha, a.target.beta);
@@ -665,11 +665,11 @@ pub(super) fn measure<T: Real>(
     };
     let decided = verdicts
         .iter()
-        .filter(|v| **v != Verdict::NotDecided)
+        .filter(|v| **v != RayVerdict::NotDecided)
         .count();
     let leaks = verdicts
         .iter()
-        .filter(|v| matches!(v, Verdict::Leak(_)))
+        .filter(|v| matches!(v, RayVerdict::Leak(_)))
         .count();
     LeakReport {
         method,

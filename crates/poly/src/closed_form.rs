@@ -9,7 +9,7 @@ use crate::{Real, Roots};
 /// gives no roots.
 ///
 /// ```
-/// use nlrt_poly::baseline::solve_cubic_closed_form;
+/// use nlrt_poly::closed_form::solve_cubic_closed_form;
 /// let r = solve_cubic_closed_form([-6.0f64, 11.0, -6.0, 1.0]);
 /// assert!((r[2] - 3.0).abs() < 1e-12);
 /// ```
