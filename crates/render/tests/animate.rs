@@ -5,7 +5,7 @@
 
 use nlrt_accel::TlasUpdate;
 use nlrt_render::lab::animate::{self, AnimateOptions};
-use nlrt_render::scene::scenes::{self, SCENE_NAMES, Size};
+use nlrt_render::scene::scenes::{self, Size, Tag, names};
 use nlrt_render::trace::integrator::RenderOptions;
 use nlrt_render::trace::method::Method;
 use std::path::{Path, PathBuf};
@@ -33,7 +33,7 @@ fn scratch(name: &str) -> PathBuf {
 /// only (the rule that keeps the oldest tree).
 #[test]
 fn every_frame_of_every_builtin_scene_equals_a_fresh_build() {
-    for name in SCENE_NAMES {
+    for name in names(Tag::Report) {
         let scene = scenes::builtin(name, Size::Small).unwrap();
         for update in [TlasUpdate::DEFAULT, TlasUpdate::Refit] {
             let opts = AnimateOptions {

@@ -102,12 +102,12 @@ fn nlrt(args: &[&str]) -> std::process::Output {
 /// variants the code knows (the list is built from them, so a new scene cannot be missed).
 #[test]
 fn help_lists_every_built_in_scene() {
-    use nlrt_render::scene::scenes::{SCENE_NAMES, VARIANT_NAMES};
+    use nlrt_render::scene::scenes::{Tag, names};
     for command in ["render", "bench", "export"] {
         let out = nlrt(&[command, "--help"]);
         assert!(out.status.success(), "{command} --help");
         let help = String::from_utf8_lossy(&out.stdout);
-        for name in SCENE_NAMES.iter().chain(VARIANT_NAMES.iter()) {
+        for name in names(Tag::Report).iter().chain(names(Tag::Variant).iter()) {
             assert!(
                 help.contains(name),
                 "{command} --help lacks {name}:\n{help}"
@@ -326,7 +326,7 @@ fn partial_pyramid_updates_after_brush_strokes_trace_like_a_fresh_build() {
 fn seams_are_closed_by_the_rule_and_leak_without_it() {
     use nlrt_accel::SeamRule;
     use nlrt_render::lab::watertight::measure;
-    for name in scenes::SEAM_SCENES {
+    for name in scenes::names(scenes::Tag::Seam) {
         let mut scene = scenes::builtin(name, scenes::Size::Small).unwrap();
         for method in [Method::NONLINEAR_F32, Method::NONLINEAR_F64] {
             let report = measure(&scene, 128, method).unwrap();
@@ -495,7 +495,7 @@ fn methods_refuse_scenes_they_cannot_represent() {
         assert!(err.contains("height fields"), "{method}: {err}");
     }
     // Every method builds for every built-in scene it says it supports, and for no other.
-    for name in scenes::SCENE_NAMES {
+    for name in scenes::names(scenes::Tag::Report) {
         let scene = scenes::builtin(name, scenes::Size::Small).unwrap();
         for method in Method::ALL {
             if method.is_reference() {
@@ -664,7 +664,7 @@ fn measuring_methods_together_equals_measuring_them_alone() {
 #[test]
 fn ghost_tori_hits_are_judged_by_the_oracle() {
     use nlrt_render::lab::watertight::measure;
-    for name in scenes::GHOST_SCENES {
+    for name in scenes::names(scenes::Tag::Ghost) {
         let scene = scenes::builtin(name, scenes::Size::Small).unwrap();
         for method in [Method::NONLINEAR_F64, Method::NONLINEAR_F32] {
             let report = measure(&scene, 64, method).unwrap();

@@ -2,7 +2,7 @@
 //! job's sizes.
 
 use nlrt_render::lab::watertight;
-use nlrt_render::scene::scenes::{self, SCENE_NAMES, Size};
+use nlrt_render::scene::scenes::{self, Size, Tag, names};
 use std::process::ExitCode;
 /// Image size `WxH`.
 pub fn distance_cell(r: &watertight::LeakReport) -> String {
@@ -27,13 +27,13 @@ pub fn fail(command: &str, message: impl std::fmt::Display) -> ExitCode {
     ExitCode::from(2)
 }
 
-pub fn check_scenes(names: &[String]) -> Result<(), String> {
-    for n in names {
+pub fn check_scenes(asked: &[String]) -> Result<(), String> {
+    for n in asked {
         if !(scenes::is_builtin(n) || n.ends_with(".toml")) {
             return Err(format!(
                 "unknown scene '{n}' (built-in scenes: {}; variants: {})",
-                SCENE_NAMES.join(", "),
-                scenes::VARIANT_NAMES.join(", ")
+                names(Tag::Report).join(", "),
+                names(Tag::Variant).join(", ")
             ));
         }
     }
@@ -45,27 +45,15 @@ pub fn check_scenes(names: &[String]) -> Result<(), String> {
 pub fn builtin_list() -> String {
     format!(
         "{}; variants {}",
-        SCENE_NAMES.join(", "),
-        scenes::VARIANT_NAMES.join(", ")
+        names(Tag::Report).join(", "),
+        names(Tag::Variant).join(", ")
     )
 }
 
 /// The built-in displacement scenes `nlrt watertight` is meant for, each once: the judged
 /// ones, the ghost-hit tori, the seam scenes, the cone fur and the cylinder.
 pub fn judged_scene_names() -> Vec<&'static str> {
-    let mut names: Vec<&'static str> = Vec::new();
-    for name in scenes::WATERTIGHT_SCENES
-        .iter()
-        .chain(scenes::GHOST_SCENES.iter())
-        .chain(scenes::SEAM_SCENES.iter())
-        .chain(["fur-cones", "cylinder"].iter())
-        .chain(["scales", "feathers", "cornell", "highpoly", "fig9"].iter())
-    {
-        if !names.contains(name) {
-            names.push(name);
-        }
-    }
-    names
+    names(Tag::Watertight)
 }
 
 /// Help for a scene argument: `what` (built-in scenes listed) or a scene file.

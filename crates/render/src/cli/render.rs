@@ -3,7 +3,7 @@
 use super::args::*;
 use super::common::*;
 use nlrt_render::lab::report::{self, ReportOptions};
-use nlrt_render::scene::scenes::SCENE_NAMES;
+use nlrt_render::scene::scenes::{Tag, names};
 use nlrt_render::trace::method::{Method, Precision};
 use std::process::ExitCode;
 
@@ -94,7 +94,7 @@ impl BenchCommand {
             );
         }
         let scenes = if scenes.is_empty() {
-            SCENE_NAMES.iter().map(|s| s.to_string()).collect()
+            names(Tag::Report).iter().map(|s| s.to_string()).collect()
         } else {
             scenes
         };

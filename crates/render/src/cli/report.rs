@@ -5,7 +5,7 @@ use super::common::*;
 use nlrt_render::lab::report::{self, ReportOptions};
 use nlrt_render::lab::watertight;
 use nlrt_render::lab::{edit, solvers};
-use nlrt_render::scene::scenes::{self, SCENE_NAMES};
+use nlrt_render::scene::scenes::{self, Tag, names};
 use nlrt_render::trace::method::Method;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -91,7 +91,7 @@ pub fn report_command(
     }
     let opts = ReportOptions {
         scenes: if scenes.is_empty() {
-            SCENE_NAMES.iter().map(|s| s.to_string()).collect()
+            names(Tag::Report).iter().map(|s| s.to_string()).collect()
         } else {
             scenes
         },
@@ -113,7 +113,7 @@ pub fn report_command(
     let mut leaks_md = String::from(
         "| scene | method | rays | decided | leaks | rate | 95% interval | ghost hits (of hits judged) | grazing | too far | hit distance vs oracle: median / p99 / max rel. error (hits compared, unverified) |\n|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
-    for name in scenes::WATERTIGHT_SCENES {
+    for name in names(Tag::ReportJudged) {
         let Some(scene) = scenes::builtin(name, args.scene_size()) else {
             continue;
         };

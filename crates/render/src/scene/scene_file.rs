@@ -181,8 +181,8 @@ pub fn builtin_or_file(name: &str, size: crate::scene::scenes::Size) -> Result<S
     crate::scene::scenes::builtin(name, size).filter(|_| known).ok_or_else(|| {
         format!(
             "unknown scene '{name}' (built-in scenes: {}; variants: {}; or a scene file *.toml)",
-            crate::scene::scenes::SCENE_NAMES.join(", "),
-            crate::scene::scenes::VARIANT_NAMES.join(", ")
+            crate::scene::scenes::names(crate::scene::scenes::Tag::Report).join(", "),
+            crate::scene::scenes::names(crate::scene::scenes::Tag::Variant).join(", ")
         )
     })
 }

@@ -13,10 +13,7 @@ pub use paper::{
     blob_object, cornell, cornell_object, cylinder, feather_object, feathers, fig9, fur, fur_cones,
     highpoly, mountain, scale_object, scales, torus_scene,
 };
-pub use registry::{
-    GHOST_SCENES, MIN_MAP_SIDE, SCENE_NAMES, SEAM_SCENES, Size, VARIANT_NAMES, WATERTIGHT_SCENES,
-    builtin, is_builtin,
-};
+pub use registry::{BUILTIN, Builtin, MIN_MAP_SIDE, Size, Tag, builtin, is_builtin, names};
 pub use scene::{Camera, Content, Scene};
 pub use variants::{
     COARSE_TORI, CoarseTorus, coarse_torus, dem_crop, fig9_displaced, ghost_torus, seam_cube,
@@ -25,7 +22,33 @@ pub use variants::{
 
 #[cfg(test)]
 mod tests {
-    use super::{Content, MIN_MAP_SIDE, Size, builtin};
+    use super::{BUILTIN, Content, MIN_MAP_SIDE, Size, Tag, builtin, names};
+
+    /// The registry names each scene once, each is either in the report or a variant, and
+    /// the shell tag matches what the shell scenes build.
+    #[test]
+    fn the_registry_names_each_scene_once_with_consistent_tags() {
+        let mut all: Vec<&str> = BUILTIN.iter().map(|b| b.name).collect();
+        all.sort_unstable();
+        all.dedup();
+        assert_eq!(all.len(), BUILTIN.len());
+        for b in &BUILTIN {
+            assert!(b.has(Tag::Report) != b.has(Tag::Variant), "{}", b.name);
+        }
+        assert_eq!(names(Tag::Report).len(), 9);
+        for name in names(Tag::Shell) {
+            let scene = builtin(name, Size::Small).unwrap();
+            assert!(matches!(scene.content, Content::Shell(_)), "{name}");
+        }
+        for tag in [Tag::Ghost, Tag::Seam, Tag::Coarse, Tag::ReportJudged] {
+            assert!(
+                names(tag)
+                    .iter()
+                    .all(|n| names(Tag::Watertight).contains(n)),
+                "{tag:?}"
+            );
+        }
+    }
 
     /// `Size::MapSide` sets every map's side and leaves the rest at the paper's sizes; sides
     /// that are not powers of two in `[MIN_MAP_SIDE, 16384]` are refused with a message.

@@ -1,71 +1,253 @@
-//! The built-in scenes by name: the lists the commands iterate, the sizes, and `builtin`.
+//! The built-in scenes by name: one registry ([`BUILTIN`]) of names, tags and builders, the
+//! sizes, and `builtin`.
 
 use super::paper::*;
 use super::scene::*;
 use super::variants::*;
 use nlrt_poly::glam::DVec3;
 
-/// Names of the built-in scenes: displacement mapping (mountain, cylinder, fur) and shell
-/// mapping (scales, cornell, fig9). `torus` is the watertightness scene of the paper's Fig. 8,
-/// `fig9` its Fig. 9 (degenerate base meshes and prisms).
-pub const SCENE_NAMES: [&str; 9] = [
-    "mountain", "cylinder", "fur", "torus", "feathers", "scales", "cornell", "highpoly", "fig9",
+/// What a built-in scene is for: the tags of the registry ([`BUILTIN`]), which the commands
+/// select by.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Tag {
+    /// Rendered by the default report and `nlrt bench` without names: the paper's displacement
+    /// scenes (mountain, cylinder, fur), its Fig. 8 torus, the shell scenes and its Fig. 9.
+    Report,
+    /// Made for one measurement, not in the default report's renders; usable everywhere a
+    /// scene is.
+    Variant,
+    /// Judged by the report's watertightness section (a closed mesh, or the mountain's convex
+    /// shell, so that rays are decidable).
+    ReportJudged,
+    /// Meant for `nlrt watertight` (its rays are decidable, or aimed at a shell's object).
+    Watertight,
+    /// A ghost-hit torus ([`ghost_torus`]): spikes, tilt or twist where f32 once reported hits
+    /// in front of the surface.
+    Ghost,
+    /// A uv-seam scene ([`seam_cube`], [`seam_sphere`]): the atlas is cut, so the two sides of
+    /// a seam sample different texels.
+    Seam,
+    /// A coarse torus ([`COARSE_TORI`]): few base triangles, tall spikes beside plateaus.
+    Coarse,
+    /// Shell mapping of an instanced object (the others are displacement mapping).
+    Shell,
+}
+
+/// One built-in scene: its name, its tags and how it is built at a [`Size`].
+pub struct Builtin {
+    /// Name (`nlrt render <name>`).
+    pub name: &'static str,
+    /// What it is for.
+    pub tags: &'static [Tag],
+    build: fn(Size) -> Option<Scene>,
+}
+
+impl Builtin {
+    /// Whether it carries `tag`.
+    #[must_use]
+    pub fn has(&self, tag: Tag) -> bool {
+        self.tags.contains(&tag)
+    }
+}
+
+/// The mountain seen at grazing angles: just above the shell's top, over the map's edge,
+/// looking across it about 4 degrees down.
+fn mountain_grazing(size: Size) -> Scene {
+    let mut m = mountain(size.pick(4096, 1024));
+    m.name = "mountain-grazing";
+    m.camera.eye = DVec3::new(0.0, 0.4, 0.95);
+    m.camera.target = DVec3::new(0.0, 0.25, -1.0);
+    m
+}
+
+/// `scene` with midlevel 0.5 (its map pushes in and out), renamed.
+fn at_half_midlevel(mut scene: Scene, name: &'static str) -> Scene {
+    scene.name = name;
+    scene.midlevel = 0.5;
+    scene
+}
+
+/// Coarse torus `k` of [`COARSE_TORI`].
+fn coarse(k: usize, size: Size) -> Option<Scene> {
+    let (name, shape) = COARSE_TORI[k];
+    Some(coarse_torus(name, shape, size.pick(256, 64)))
+}
+
+use Tag::{Coarse, Ghost, Report, ReportJudged, Seam, Shell, Variant, Watertight};
+
+/// Every built-in scene, the report's first (in the order it renders them), then the variants.
+pub const BUILTIN: [Builtin; 29] = [
+    Builtin {
+        name: "mountain",
+        tags: &[Report, ReportJudged, Watertight],
+        build: |s| Some(mountain(s.pick(4096, 1024))),
+    },
+    Builtin {
+        name: "cylinder",
+        tags: &[Report, Watertight],
+        build: |s| Some(cylinder(s.pick(4096, 1024))),
+    },
+    Builtin {
+        name: "fur",
+        tags: &[Report, ReportJudged, Watertight],
+        build: |s| Some(fur(s.pick(256, 64))),
+    },
+    Builtin {
+        name: "torus",
+        tags: &[Report, ReportJudged, Watertight],
+        build: |s| Some(torus_scene(s.pick(1024, 256))),
+    },
+    Builtin {
+        name: "feathers",
+        tags: &[Report, Watertight, Shell],
+        build: |_| Some(feathers()),
+    },
+    Builtin {
+        name: "scales",
+        tags: &[Report, Watertight, Shell],
+        build: |_| Some(scales()),
+    },
+    Builtin {
+        name: "cornell",
+        tags: &[Report, Watertight, Shell],
+        build: |s| Some(cornell(s.detail(15, 6))),
+    },
+    Builtin {
+        name: "highpoly",
+        tags: &[Report, Watertight, Shell],
+        build: |s| Some(highpoly(s.detail(270, 32))),
+    },
+    Builtin {
+        name: "fig9",
+        tags: &[Report, Watertight, Shell],
+        build: |_| Some(fig9()),
+    },
+    Builtin {
+        name: "dem-crop",
+        tags: &[Variant],
+        build: |s| Some(dem_crop(if s == Size::Small { 150 } else { 601 })),
+    },
+    Builtin {
+        name: "mountain-midlevel",
+        tags: &[Variant],
+        build: |s| {
+            Some(at_half_midlevel(
+                mountain(s.pick(4096, 1024)),
+                "mountain-midlevel",
+            ))
+        },
+    },
+    Builtin {
+        name: "torus-midlevel",
+        tags: &[Variant],
+        build: |s| {
+            Some(at_half_midlevel(
+                torus_scene(s.pick(1024, 256)),
+                "torus-midlevel",
+            ))
+        },
+    },
+    Builtin {
+        name: COARSE_TORI[0].0,
+        tags: &[Variant, Coarse, Watertight],
+        build: |s| coarse(0, s),
+    },
+    Builtin {
+        name: COARSE_TORI[1].0,
+        tags: &[Variant, Coarse, Watertight],
+        build: |s| coarse(1, s),
+    },
+    Builtin {
+        name: COARSE_TORI[2].0,
+        tags: &[Variant, Coarse, Watertight],
+        build: |s| coarse(2, s),
+    },
+    Builtin {
+        name: COARSE_TORI[3].0,
+        tags: &[Variant, Coarse, Watertight],
+        build: |s| coarse(3, s),
+    },
+    Builtin {
+        name: COARSE_TORI[4].0,
+        tags: &[Variant, Coarse, Watertight],
+        build: |s| coarse(4, s),
+    },
+    Builtin {
+        name: COARSE_TORI[5].0,
+        tags: &[Variant, Coarse, Watertight],
+        build: |s| coarse(5, s),
+    },
+    Builtin {
+        name: COARSE_TORI[6].0,
+        tags: &[Variant, Coarse, Watertight],
+        build: |s| coarse(6, s),
+    },
+    Builtin {
+        name: COARSE_TORI[7].0,
+        tags: &[Variant, Coarse, Watertight],
+        build: |s| coarse(7, s),
+    },
+    Builtin {
+        name: COARSE_TORI[8].0,
+        tags: &[Variant, Coarse, Watertight],
+        build: |s| coarse(8, s),
+    },
+    Builtin {
+        name: "mountain-grazing",
+        tags: &[Variant, ReportJudged, Watertight],
+        build: |s| Some(mountain_grazing(s)),
+    },
+    Builtin {
+        name: "fur-cones",
+        tags: &[Variant, Watertight],
+        build: |s| Some(fur_cones(s.pick(256, 64))),
+    },
+    Builtin {
+        name: "fig9-displaced",
+        tags: &[Variant, ReportJudged, Watertight],
+        build: |s| Some(fig9_displaced(s.pick(1024, 256))),
+    },
+    Builtin {
+        name: "torus-spikes",
+        tags: &[Variant, Ghost, Watertight],
+        build: |s| ghost_torus("torus-spikes", s.pick(256, 64)),
+    },
+    Builtin {
+        name: "torus-tilted",
+        tags: &[Variant, Ghost, Watertight],
+        build: |s| ghost_torus("torus-tilted", s.pick(256, 64)),
+    },
+    Builtin {
+        name: "torus-twisted",
+        tags: &[Variant, Ghost, Watertight],
+        build: |s| ghost_torus("torus-twisted", s.pick(256, 64)),
+    },
+    Builtin {
+        name: "seam-cube",
+        tags: &[Variant, Seam, ReportJudged, Watertight],
+        build: |s| Some(seam_cube(s.pick(1024, 256))),
+    },
+    Builtin {
+        name: "seam-sphere",
+        tags: &[Variant, Seam, Watertight],
+        build: |s| Some(seam_sphere(s.pick(1024, 256))),
+    },
 ];
 
-/// Scenes whose rays `nlrt watertight` can decide (displacement scenes: closed meshes, or the
-/// mountain's convex shell) and the report measures.
-pub const WATERTIGHT_SCENES: [&str; 6] = [
-    "torus",
-    "fur",
-    "mountain",
-    "mountain-grazing",
-    "fig9-displaced",
-    "seam-cube",
-];
+/// The names of the built-in scenes carrying `tag`, in [`BUILTIN`]'s order.
+#[must_use]
+pub fn names(tag: Tag) -> Vec<&'static str> {
+    BUILTIN
+        .iter()
+        .filter(|b| b.has(tag))
+        .map(|b| b.name)
+        .collect()
+}
 
-/// The ghost-hit tori ([`ghost_torus`]): judged by `nlrt watertight`, not by the report
-/// (their figures are in `docs/watertightness.md`).
-pub const GHOST_SCENES: [&str; 3] = ["torus-spikes", "torus-tilted", "torus-twisted"];
-
-/// The uv-seam scenes ([`seam_cube`], [`seam_sphere`]): base meshes whose atlas is cut, so
-/// the two sides of each seam sample different texels.
-pub const SEAM_SCENES: [&str; 2] = ["seam-cube", "seam-sphere"];
-
-/// Built-in scene variants made for one measurement, not part of the default report's
-/// renders: `mountain-grazing` (the mountain seen at grazing angles), `fur-cones` (the fur's
-/// torus under broad cones, [`fur_cones`]), `fig9-displaced` (Fig.
-/// 9's columns with a height map), the ghost-hit tori ([`ghost_torus`]) and the seam scenes
-/// ([`SEAM_SCENES`]), the coarse tori ([`COARSE_TORI`]), `mountain-midlevel` and
-/// `torus-midlevel` (the mountain and the torus with midlevel 0.5: the maps push in and out),
-/// and `dem-crop` ([`dem_crop`]: a map neither square nor a power of two), for
-/// `nlrt watertight`, and usable everywhere a scene is.
-pub const VARIANT_NAMES: [&str; 20] = [
-    "dem-crop",
-    "mountain-midlevel",
-    "torus-midlevel",
-    COARSE_TORI[0].0,
-    COARSE_TORI[1].0,
-    COARSE_TORI[2].0,
-    COARSE_TORI[3].0,
-    COARSE_TORI[4].0,
-    COARSE_TORI[5].0,
-    COARSE_TORI[6].0,
-    COARSE_TORI[7].0,
-    COARSE_TORI[8].0,
-    "mountain-grazing",
-    "fur-cones",
-    "fig9-displaced",
-    "torus-spikes",
-    "torus-tilted",
-    "torus-twisted",
-    "seam-cube",
-    "seam-sphere",
-];
-
-/// Whether `name` is a built-in scene or variant.
+/// Whether `name` is a built-in scene.
 #[must_use]
 pub fn is_builtin(name: &str) -> bool {
-    SCENE_NAMES.contains(&name) || VARIANT_NAMES.contains(&name)
+    BUILTIN.iter().any(|b| b.name == name)
 }
 
 /// Sizes of a built-in scene: the paper's, or reduced for quick runs, or the paper's with
@@ -123,50 +305,8 @@ impl Size {
 /// The built-in scene `name` at `size`; `None` for an unknown name.
 #[must_use]
 pub fn builtin(name: &str, size: Size) -> Option<Scene> {
-    let map = |paper, small| size.pick(paper, small);
-    match name {
-        "mountain" => Some(mountain(map(4096, 1024))),
-        "cylinder" => Some(cylinder(map(4096, 1024))),
-        "fur" => Some(fur(map(256, 64))),
-        "fur-cones" => Some(fur_cones(map(256, 64))),
-        "torus" => Some(torus_scene(map(1024, 256))),
-        "mountain-grazing" => {
-            // The watertightness view of the mountain: just above the shell's top, over the
-            // map's edge, looking across it about 4 degrees down.
-            let mut m = mountain(map(4096, 1024));
-            m.name = "mountain-grazing";
-            m.camera.eye = DVec3::new(0.0, 0.4, 0.95);
-            m.camera.target = DVec3::new(0.0, 0.25, -1.0);
-            Some(m)
-        }
-        "mountain-midlevel" | "torus-midlevel" => {
-            let mut scene = if name == "mountain-midlevel" {
-                mountain(map(4096, 1024))
-            } else {
-                torus_scene(map(1024, 256))
-            };
-            scene.name = if name == "mountain-midlevel" {
-                "mountain-midlevel"
-            } else {
-                "torus-midlevel"
-            };
-            scene.midlevel = 0.5;
-            Some(scene)
-        }
-        "dem-crop" => Some(dem_crop(if size == Size::Small { 150 } else { 601 })),
-        "scales" => Some(scales()),
-        "fig9" => Some(fig9()),
-        "fig9-displaced" => Some(fig9_displaced(map(1024, 256))),
-        "torus-spikes" | "torus-tilted" | "torus-twisted" => ghost_torus(name, map(256, 64)),
-        _ if name.starts_with("torus-coarse") => COARSE_TORI
-            .iter()
-            .find(|(n, _)| *n == name)
-            .map(|&(n, shape)| coarse_torus(n, shape, map(256, 64))),
-        "cornell" => Some(cornell(size.detail(15, 6))),
-        "seam-cube" => Some(seam_cube(map(1024, 256))),
-        "seam-sphere" => Some(seam_sphere(map(1024, 256))),
-        "feathers" => Some(feathers()),
-        "highpoly" => Some(highpoly(size.detail(270, 32))),
-        _ => None,
-    }
+    BUILTIN
+        .iter()
+        .find(|b| b.name == name)
+        .and_then(|b| (b.build)(size))
 }

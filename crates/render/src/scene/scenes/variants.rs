@@ -1,5 +1,5 @@
-//! Built-in scene variants made for one measurement (`VARIANT_NAMES`): the ghost-hit and
-//! coarse tori, `fig9-displaced`, the uv-seam scenes and `dem-crop`.
+//! Built-in scene variants made for one measurement (tagged `Tag::Variant` in the registry):
+//! the ghost-hit and coarse tori, `fig9-displaced`, the uv-seam scenes and `dem-crop`.
 
 use super::maps::*;
 use super::paper::*;
