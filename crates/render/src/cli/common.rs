@@ -22,6 +22,24 @@ pub fn ghost_cell(r: &watertight::LeakReport) -> String {
     })
 }
 
+/// A watertightness table row up to its distance cell: label, method, rays, decided, leaks,
+/// rate, its 95% interval, ghost hits, grazing, too far and the distances.
+pub fn leak_row(label: &str, r: &watertight::LeakReport) -> String {
+    let (lo, hi) = r.wilson_95();
+    format!(
+        "| {label} | {} | {} | {} | {} | {:.2e} | [{:.1e}, {:.1e}] | {} | {} |",
+        r.method,
+        r.rays,
+        r.decided,
+        r.leaks,
+        r.rate(),
+        lo,
+        hi,
+        ghost_cell(r),
+        distance_cell(r)
+    )
+}
+
 pub fn fail(command: &str, message: impl std::fmt::Display) -> ExitCode {
     eprintln!("nlrt {command}: {message}");
     ExitCode::from(2)

@@ -131,19 +131,8 @@ pub fn report_command(
             Err(e) => return fail("report", e),
         };
         for r in reports {
-            let (lo, hi) = r.wilson_95();
-            leaks_md.push_str(&format!(
-                "| {name} | {} | {} | {} | {} | {:.2e} | [{:.1e}, {:.1e}] | {} | {} |\n",
-                r.method,
-                r.rays,
-                r.decided,
-                r.leaks,
-                r.rate(),
-                lo,
-                hi,
-                ghost_cell(&r),
-                distance_cell(&r)
-            ));
+            leaks_md.push_str(&leak_row(name, &r));
+            leaks_md.push('\n');
             let path = output.join(format!("{name}-leaks-{}.png", r.method.slug()));
             if let Err(e) = nlrt_render::trace::image::write_png(
                 &path,

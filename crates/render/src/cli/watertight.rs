@@ -77,19 +77,16 @@ impl WatertightCommand {
                     format!("{file_stem}-object-{}", k + 1),
                 )
             };
-            if let Err(e) = judge_object(
-                object,
-                &label,
-                &stem,
-                k == 0,
+            let judging = Judging {
                 rays,
                 precision,
                 method,
                 ghost_samples,
                 frame,
                 frames,
-                &output,
-            ) {
+                output: &output,
+            };
+            if let Err(e) = judge_object(object, &label, &stem, k == 0, judging) {
                 return fail("watertight", e);
             }
         }
@@ -97,23 +94,44 @@ impl WatertightCommand {
     }
 }
 
+/// How `nlrt watertight` judges each object: its arguments.
+#[derive(Clone, Copy)]
+pub struct Judging<'a> {
+    /// Rays (at least; a square grid).
+    pub rays: u64,
+    /// Only this precision.
+    pub precision: Option<Precision>,
+    /// Only this kind of method.
+    pub method: Option<Kind>,
+    /// Hits judged for ghosts (`None`: every hit).
+    pub ghost_samples: Option<u64>,
+    /// The frame of the motion judged.
+    pub frame: Option<u32>,
+    /// Frames of the motion's cycle.
+    pub frames: u32,
+    /// Directory of the leak images.
+    pub output: &'a Option<PathBuf>,
+}
+
 /// `nlrt watertight` on one object of a scene (`built` traced alone, its `others` not looked
 /// at): `scene` labels its rows and messages, `stem` names its leak images, `header` prints
 /// the table's header first.
-#[allow(clippy::too_many_arguments)]
 pub fn judge_object(
     built: &scenes::Scene,
     scene: &str,
     stem: &str,
     header: bool,
-    rays: u64,
-    precision: Option<Precision>,
-    method: Option<Kind>,
-    ghost_samples: Option<u64>,
-    frame: Option<u32>,
-    frames: u32,
-    output: &Option<PathBuf>,
+    judging: Judging<'_>,
 ) -> Result<(), String> {
+    let Judging {
+        rays,
+        precision,
+        method,
+        ghost_samples,
+        frame,
+        frames,
+        output,
+    } = judging;
     let side = ((rays as f64).sqrt().ceil() as usize).max(1);
     // Shell-mapped scenes are judged for nonlinear tracing only (the other judged
     // methods displace a height field); asking for another says so.
@@ -206,20 +224,7 @@ pub fn judge_object(
                 }
             ));
         }
-        let (lo, hi) = r.wilson_95();
-        println!(
-            "| {label} | {} | {} | {} | {} | {:.2e} | [{:.1e}, {:.1e}] | {} | {} | {:.1} |",
-            r.method,
-            r.rays,
-            r.decided,
-            r.leaks,
-            r.rate(),
-            lo,
-            hi,
-            ghost_cell(&r),
-            distance_cell(&r),
-            r.seconds
-        );
+        println!("{} {:.1} |", leak_row(&label, &r), r.seconds);
         if let Some(dir) = output
             && !shell
         {
