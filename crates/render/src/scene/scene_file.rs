@@ -265,16 +265,27 @@ pub fn load_from(path: &Path, source: &Source<'_>) -> Result<Scene, String> {
     };
     let mut objects = Vec::with_capacity(sections.len());
     let label = path.display().to_string();
+    let mut triangles = 0u64;
     for (k, section) in sections.into_iter().enumerate() {
         let object = load_object(&label, dir, source, &mut limit, section);
         // Every message begins with a file's path: the scene file's, for an object's.
-        objects.push(object.map_err(|e| {
+        let object = object.map_err(|e| {
             if several {
                 format!("{label}: object {}: {e}", k + 1)
             } else {
                 e
             }
-        })?);
+        })?;
+        // Hit ids run through every object's base triangles (`ObjectUnion`): they must fit
+        // in 32 bits together, as one mesh's indices do.
+        triangles += object.triangles.len() as u64;
+        if triangles > u64::from(u32::MAX) {
+            return Err(in_file(format!(
+                "the objects up to object {} hold more than 2^32 - 1 base triangles together; hit ids need fewer",
+                k + 1
+            )));
+        }
+        objects.push(object);
     }
     let check = |what: &str, v: f64, ok: bool| {
         if ok {

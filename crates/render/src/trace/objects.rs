@@ -26,8 +26,8 @@ impl<Tr: Tracer> ObjectUnion<Tr> {
     /// scene's object order.
     ///
     /// # Panics
-    /// More base triangles over all objects than `u32` ids can name (no mesh that fits in
-    /// memory has).
+    /// More base triangles over all objects than `u32` ids can name: scene files refuse such
+    /// objects when loaded, and no built-in scene comes near.
     #[must_use]
     pub fn new(parts: impl IntoIterator<Item = (Tr, usize)>) -> Self {
         let mut first = 0u32;
