@@ -2,10 +2,13 @@
 //! path tracer and its images. Depends on [`crate::scene`] only.
 
 #[cfg(feature = "embree")]
+pub mod embree_grid;
+#[cfg(feature = "embree")]
 pub mod embree_reference;
 #[cfg(feature = "embree")]
 pub mod embree_user;
 pub mod geometry_image;
+pub mod grid_mesh;
 pub mod image;
 pub mod integrator;
 pub mod method;

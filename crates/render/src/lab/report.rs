@@ -454,6 +454,7 @@ fn speed_against_error_svg(points: &[(Method, String, f64, ErrorStats)]) -> Stri
             Kind::Curved => ["#17becf", "#9edae5"],
             Kind::Embree => ["#000000"; 2],
             Kind::EmbreeNative => ["#555555"; 2],
+            Kind::EmbreeGrid => ["#999999"; 2],
             Kind::Tessellated => ["#2ca02c"; 2],
             Kind::TessellatedCurved => ["#bcbd22"; 2],
         };

@@ -174,6 +174,9 @@ pub(crate) struct EmbreeHit {
     pub(crate) normal: DVec3,
     pub(crate) prim_id: u32,
     pub(crate) geom_id: u32,
+    /// The hit's coordinates on the primitive (over the whole grid, for grid geometry).
+    pub(crate) u: f32,
+    pub(crate) v: f32,
 }
 
 /// The nearest hit of one ray in a committed Embree `scene` (`rtcIntersect1`, incoherent).
@@ -228,6 +231,8 @@ pub(crate) fn intersect1(
         normal: if n.dot(dir) > 0.0 { -n } else { n },
         prim_id: h.primID,
         geom_id: h.geomID,
+        u: h.u,
+        v: h.v,
     })
 }
 

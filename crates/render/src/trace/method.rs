@@ -61,6 +61,10 @@ pub enum Kind {
     Embree,
     /// Embree 3 choosing its kernels for this CPU (f32; the `embree` feature).
     EmbreeNative,
+    /// The same microtriangles as Embree 3 grid geometry (one vertex per texel corner),
+    /// pinned to the build's instruction set (f32; the `embree` feature); height fields whose
+    /// base mesh pairs triangles into squares of whole texels only.
+    EmbreeGrid,
     /// The pre-tessellated reference (f64).
     Tessellated,
     /// The curved shell's surface pre-tessellated (f64): the curved shell's reference.
@@ -84,7 +88,7 @@ struct Entry {
 }
 
 /// The one table of the methods' names, in [`Method::ALL`]'s order.
-const TABLE: [Entry; 24] = [
+const TABLE: [Entry; 25] = [
     Entry {
         method: Method::NONLINEAR_F32,
         name: "nonlinear f32",
@@ -194,6 +198,11 @@ const TABLE: [Entry; 24] = [
         method: Method::EMBREE_NATIVE_F32,
         name: "Embree 3 pre-tessellated f32, native ISA",
         slug: "embree-native-f32",
+    },
+    Entry {
+        method: Method::EMBREE_GRID_F32,
+        name: "Embree 3 grids f32",
+        slug: "embree-grid-f32",
     },
     Entry {
         method: Method::TESSELLATED_F64,
@@ -339,6 +348,14 @@ impl Method {
         kind: Kind::EmbreeNative,
         precision: Precision::F32,
     };
+    /// The same microtriangles as Embree 3 grid geometry, one vertex per texel corner
+    /// (`RTC_GEOMETRY_TYPE_GRID`; [`crate::trace::grid_mesh`]), kernels pinned as
+    /// [`Method::EMBREE_F32`]'s: what a memory-conscious Embree user builds for a height
+    /// field. Only with the `embree` feature, for base meshes of texel squares.
+    pub const EMBREE_GRID_F32: Method = Method {
+        kind: Kind::EmbreeGrid,
+        precision: Precision::F32,
+    };
     /// Pre-tessellated microtriangles in a world-space BVH (f64): the reference.
     pub const TESSELLATED_F64: Method = Method {
         kind: Kind::Tessellated,
@@ -352,7 +369,7 @@ impl Method {
     };
 
     /// All methods, references last.
-    pub const ALL: [Method; 24] = [
+    pub const ALL: [Method; 25] = [
         Method::NONLINEAR_F32,
         Method::NONLINEAR_F64,
         Method::TESSELLATION_FREE_F32,
@@ -375,6 +392,7 @@ impl Method {
         Method::CURVED_F64,
         Method::EMBREE_F32,
         Method::EMBREE_NATIVE_F32,
+        Method::EMBREE_GRID_F32,
         Method::TESSELLATED_F64,
         Method::TESSELLATED_CURVED_F64,
     ];
@@ -525,7 +543,10 @@ impl Method {
                 }
                 Content::Displacement(_) => None,
             },
-            Kind::Embree | Kind::EmbreeNative => {
+            Kind::EmbreeGrid if cfg!(feature = "embree") => {
+                crate::trace::grid_mesh::squares(scene).err()
+            }
+            Kind::Embree | Kind::EmbreeNative | Kind::EmbreeGrid => {
                 if cfg!(feature = "embree") {
                     None
                 } else {
@@ -628,8 +649,15 @@ impl Method {
                     crate::trace::embree_reference::Isa::Native,
                 )?)
             }
+            #[cfg(feature = "embree")]
+            (Kind::EmbreeGrid, Precision::F32) => {
+                Box::new(crate::trace::embree_grid::EmbreeGrids::new(
+                    scene,
+                    crate::trace::embree_reference::Isa::Build,
+                )?)
+            }
             #[cfg(not(feature = "embree"))]
-            (Kind::Embree, Precision::F32) | (Kind::EmbreeNative, Precision::F32) => return None,
+            (Kind::Embree | Kind::EmbreeNative | Kind::EmbreeGrid, Precision::F32) => return None,
             (Kind::Tessellated, Precision::F64) => Box::new(Tessellated::new(scene)),
             (Kind::TessellatedCurved, Precision::F64) => Box::new(Tessellated::curved(scene)),
             // No other combination is a method (`Method::new`).
@@ -659,7 +687,7 @@ mod tests {
         slugs.dedup();
         names.sort_unstable();
         names.dedup();
-        assert_eq!((slugs.len(), names.len()), (24, 24));
+        assert_eq!((slugs.len(), names.len()), (25, 25));
         let mut found = 0;
         for &kind in Kind::value_variants() {
             for precision in [Precision::F32, Precision::F64] {

@@ -136,6 +136,49 @@ fn seam_walls(
     out
 }
 
+/// The seams a displacement scene closes as nonlinear tracing closes them
+/// ([`nlrt_accel::SeamRule`]), the displacement directions (welded across them) and the
+/// shell's floor (the base mesh at the midlevel's depth, moved after the welding): what the
+/// pre-tessellated surfaces are built on.
+pub(crate) fn displaced_floor(scene: &Scene) -> (Option<Seams>, Vec<DVec3>, Vec<DVec3>) {
+    let seams = match (&scene.content, scene.seam_rule) {
+        (Content::Displacement(field), SeamRule::Closed) => Some(Seams::find(
+            &scene.mesh::<f64>(),
+            scene.tiling,
+            field.wrap() == Wrap::Repeat,
+        )),
+        _ => None,
+    };
+    let normals = seams.as_ref().map_or_else(
+        || scene.normals.clone(),
+        |s| s.welded_normals::<f64>(&scene.normals),
+    );
+    let floor = nlrt_accel::shell_floor::<f64>(
+        &scene.positions,
+        &normals,
+        scene.height_scale,
+        scene.midlevel,
+    );
+    (seams, normals, floor)
+}
+
+/// The point `q` (texel units) of base triangle `t` (its uvs in texel units, `det` their
+/// orientation's determinant) mapped by Eq. 1 over the flat prism of floor points `p` and
+/// scaled directions `n`: the map the pre-tessellated surfaces put their vertices through.
+pub(crate) fn flat_world(
+    t: &[DVec2; 3],
+    det: f64,
+    p: &[DVec3; 3],
+    n: &[DVec3; 3],
+    q: [f64; 3],
+) -> DVec3 {
+    let d = DVec2::new(q[0], q[1]) - t[0];
+    let alpha = d.perp_dot(t[2] - t[0]) / det;
+    let beta = (t[1] - t[0]).perp_dot(d) / det;
+    let at = |k: usize| p[k] + n[k] * q[2];
+    at(0) + (at(1) - at(0)) * alpha + (at(2) - at(0)) * beta
+}
+
 impl Tessellated {
     /// Tessellates `scene` (in parallel over texel rows).
     #[must_use]
@@ -159,30 +202,8 @@ impl Tessellated {
             Content::Shell(_) => DVec2::ONE,
         };
         let scale = scene.tiling * cells_per_tile;
-        // Seams closed as nonlinear tracing closes them (`nlrt_accel::SeamRule`): welded
-        // displacement directions, and walls between the two sides' heights.
-        let seams = match (&scene.content, scene.seam_rule) {
-            (Content::Displacement(field), SeamRule::Closed) => Some(Seams::find(
-                &scene.mesh::<f64>(),
-                scene.tiling,
-                field.wrap() == Wrap::Repeat,
-            )),
-            _ => None,
-        };
-        let normals = seams.as_ref().map_or_else(
-            || scene.normals.clone(),
-            |s| s.welded_normals::<f64>(&scene.normals),
-        );
-        let normals = &normals;
-        // The shell's floor: the base mesh at the midlevel's depth (as nonlinear tracing
-        // moves it, after the welding).
-        let floor = nlrt_accel::shell_floor::<f64>(
-            &scene.positions,
-            normals,
-            scene.height_scale,
-            scene.midlevel,
-        );
-        let floor = &floor;
+        let (seams, normals, floor) = displaced_floor(scene);
+        let (normals, floor) = (&normals, &floor);
         // (base triangle, texel row) jobs.
         let mut jobs = Vec::new();
         let mut skipped = 0;
@@ -222,16 +243,14 @@ impl Tessellated {
                     (a, DVec2::new(-e.y, e.x) * orient)
                 });
                 let world = move |q: &Uvh| {
-                    let d = DVec2::new(q[0], q[1]) - t[0];
-                    let alpha = d.perp_dot(t[2] - t[0]) / det;
-                    let beta = (t[1] - t[0]).perp_dot(d) / det;
                     if curved {
+                        let d = DVec2::new(q[0], q[1]) - t[0];
+                        let alpha = d.perp_dot(t[2] - t[0]) / det;
+                        let beta = (t[1] - t[0]).perp_dot(d) / det;
                         return Prism::<f64>::new(p, n, [DVec2::ZERO; 3])
                             .curved_shell_point(alpha, beta, q[2]);
                     }
-                    let h = q[2];
-                    let at = |k: usize| p[k] + n[k] * h;
-                    at(0) + (at(1) - at(0)) * alpha + (at(2) - at(0)) * beta
+                    flat_world(&t, det, &p, &n, *q)
                 };
                 let mut out = Vec::new();
                 for x in x0..=x1 {
