@@ -42,7 +42,10 @@ fn grids_hit_where_the_triangle_mesh_does() {
         }
         assert!(hits > n * n / 4, "{name}: {hits}");
         assert!(other_id * 100 <= hits, "{name}: {other_id} of {hits}");
-        assert!(grids.memory_bytes() * 2 < triangles.memory_bytes(), "{name}");
+        assert!(
+            grids.memory_bytes() * 2 < triangles.memory_bytes(),
+            "{name}"
+        );
     }
     let cornell = builtin("cornell", Size::Small).expect("built-in");
     assert!(!Method::EMBREE_GRID_F32.supports(&cornell));

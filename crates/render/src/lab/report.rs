@@ -266,10 +266,19 @@ fn run_scene_with_stream(
     let mut runs: Vec<MethodRun> = opts
         .methods
         .iter()
-        .filter(|m| m.supports(scene))
-        .map(|&method| {
+        .filter_map(|&method| {
+            if let Some(why) = method.unsupported_reason(scene) {
+                eprintln!("  {}: {method} left out: {why}", scene.name);
+                return None;
+            }
             eprintln!("  {}: building {method}", scene.name);
-            let (tracer, init_seconds) = build(scene, method).expect("supported method");
+            let Some((tracer, init_seconds)) = build(scene, method) else {
+                eprintln!(
+                    "  {}: {method} left out: its acceleration data could not be built (memory)",
+                    scene.name
+                );
+                return None;
+            };
             let label = format!("{} {method}", scene.name);
             let frame = render(
                 scene,
@@ -311,7 +320,7 @@ fn run_scene_with_stream(
             if interleaved {
                 kept.push(tracer);
             }
-            run
+            Some(run)
         })
         .collect();
     if let (true, Some((_, stream))) = (interleaved, &recorded) {

@@ -75,13 +75,21 @@ fn texel_uvs<'a>(scene: &'a Scene, field: &HeightField) -> impl Fn(usize) -> [DV
     move |b: usize| scene.triangles[b].map(|v| scene.uvs[v as usize] * scale)
 }
 
-/// The squares of whole texels `[x0, y0, n]` that pairs of base triangles cover and the
-/// pairs (below, above the diagonal), or why the scene has none: what
-/// [`GridMesh::new`] checks before it allocates.
+/// A square of whole texels that two base triangles cover.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Square {
+    /// Its texel-space corner `(x0, y0)` and side `n`: `[x0, y0, n]`.
+    pub square: [i64; 3],
+    /// The base triangle below its diagonal (`x - x0 > y - y0`) and the one above.
+    pub base: [u32; 2],
+}
+
+/// The squares of whole texels that pairs of base triangles cover, or why the scene has none:
+/// what [`GridMesh::new`] checks before it allocates.
 ///
 /// # Errors
 /// As [`GridMesh::new`], but for memory.
-pub fn squares(scene: &Scene) -> Result<Vec<([i64; 3], [u32; 2])>, &'static str> {
+pub fn squares(scene: &Scene) -> Result<Vec<Square>, &'static str> {
     let Content::Displacement(field) = &scene.content else {
         return Err(NOT_A_HEIGHT_FIELD);
     };
@@ -99,7 +107,7 @@ pub fn squares(scene: &Scene) -> Result<Vec<([i64; 3], [u32; 2])>, &'static str>
             by_edge.entry([i.min(j), i.max(j)]).or_default().push(b);
         }
     }
-    let square_of = |a: usize, b: usize| -> Option<([i64; 3], [u32; 2])> {
+    let square_of = |a: usize, b: usize| -> Option<Square> {
         let corners: Vec<[i64; 2]> = texel_uvs(a)
             .iter()
             .chain(texel_uvs(b).iter())
@@ -119,7 +127,10 @@ pub fn squares(scene: &Scene) -> Result<Vec<([i64; 3], [u32; 2])>, &'static str>
             && below(ta) != below(tb)
             && [ta, tb].iter().any(|t| t.contains(&[x0, y0 + n]));
         let base = if below(ta) { [a, b] } else { [b, a] };
-        square.then_some(([x0, y0, n], base.map(|t| t as u32)))
+        square.then_some(Square {
+            square: [x0, y0, n],
+            base: base.map(|t| t as u32),
+        })
     };
     let mut squares = Vec::new();
     let mut paired = vec![false; scene.triangles.len()];
@@ -146,7 +157,7 @@ pub fn squares(scene: &Scene) -> Result<Vec<([i64; 3], [u32; 2])>, &'static str>
     }
     let vertices: u64 = squares
         .iter()
-        .map(|([_, _, n], _)| (*n as u64 + 1).pow(2))
+        .map(|q| (q.square[2] as u64 + 1).pow(2))
         .sum();
     if vertices > u64::from(u32::MAX) {
         return Err("grid geometry of more vertices than 32-bit indices address");
@@ -175,14 +186,18 @@ impl GridMesh {
         let texel_uvs = texel_uvs(scene, field);
         let total: u64 = squares
             .iter()
-            .map(|([_, _, n], _)| (*n as u64 + 1).pow(2))
+            .map(|q| (q.square[2] as u64 + 1).pow(2))
             .sum();
         let mut vertices = Vec::new();
         if vertices.try_reserve_exact(total as usize).is_err() {
             return Err("grid geometry's vertices do not fit in memory");
         }
         let mut grids = Vec::new();
-        for ([x0, y0, n], base) in squares {
+        for Square {
+            square: [x0, y0, n],
+            base,
+        } in squares
+        {
             let maps = base.map(|b| {
                 let b = b as usize;
                 let tri = scene.triangles[b];
