@@ -922,3 +922,42 @@ fn the_scales_close_along_a_tile_boundary() {
         assert!(misses.is_empty(), "{name}: {misses:?}");
     }
 }
+
+/// A method that cannot render a scene is left out of the bench with its reason (and the
+/// methods that can still run); Embree's grids need a height field, and without the `embree`
+/// feature the feature is named.
+#[test]
+fn bench_names_the_methods_it_leaves_out_and_why() {
+    let out = nlrt(&[
+        "bench",
+        "cornell",
+        "--methods",
+        "cone-ray-f32,embree-grid-f32,nonlinear-f32",
+        "--no-reference",
+        "--no-ray-stream",
+        "--size",
+        "16x12",
+    ]);
+    assert!(out.status.success(), "{out:?}");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        stderr
+            .contains("cone tracing (ray rect.) f32 left out: cone tracing renders height fields"),
+        "{stderr}"
+    );
+    let grid_reason = if cfg!(feature = "embree") {
+        "grid geometry holds height fields"
+    } else {
+        "built without the `embree` feature"
+    };
+    assert!(
+        stderr.contains(&format!("Embree 3 grids f32 left out: {grid_reason}")),
+        "{stderr}"
+    );
+    assert!(stdout.contains("| cornell | nonlinear f32 |"), "{stdout}");
+    assert!(
+        !stdout.contains("| cornell | Embree 3 grids f32 |"),
+        "{stdout}"
+    );
+}
