@@ -11,7 +11,7 @@ use embree::sys;
 use nlrt_poly::glam::DVec3;
 
 use crate::scene::scenes::Scene;
-use crate::trace::embree_reference::{Isa, MemoryCounter, new_device};
+use crate::trace::embree_reference::{Isa, MemoryCounter, new_device, scene_of};
 use crate::trace::grid_mesh::GridMesh;
 use crate::trace::tracer::{TraceHit, Tracer};
 
@@ -73,13 +73,9 @@ impl EmbreeGrids {
             }
             grids.vertices = Vec::new();
             sys::rtcCommitGeometry(geometry);
-            let handle = sys::rtcNewScene(device);
-            sys::rtcAttachGeometry(handle, geometry);
-            sys::rtcReleaseGeometry(geometry);
-            sys::rtcCommitScene(handle);
             Some(Self {
                 device,
-                scene: handle,
+                scene: scene_of(device, geometry),
                 grids,
                 allocated,
             })

@@ -140,6 +140,22 @@ pub(crate) unsafe fn triangle_geometry(
     }
 }
 
+/// A committed Embree scene of the one committed `geometry` (whose reference passes to the
+/// scene).
+///
+/// # Safety
+/// `device` is a live Embree device and `geometry` a committed geometry of it.
+pub(crate) unsafe fn scene_of(device: sys::RTCDevice, geometry: sys::RTCGeometry) -> sys::RTCScene {
+    // SAFETY: the caller's handles are live; the scene takes its own reference.
+    unsafe {
+        let scene = sys::rtcNewScene(device);
+        sys::rtcAttachGeometry(scene, geometry);
+        sys::rtcReleaseGeometry(geometry);
+        sys::rtcCommitScene(scene);
+        scene
+    }
+}
+
 impl EmbreeTessellated {
     /// Tessellates `scene` and builds the Embree scene with kernels `isa`; `None` when Embree
     /// cannot create a device (no supported CPU, or the library refuses).
@@ -153,13 +169,9 @@ impl EmbreeTessellated {
                 sys::rtcReleaseDevice(device);
                 return None;
             };
-            let handle = sys::rtcNewScene(device);
-            sys::rtcAttachGeometry(handle, geometry);
-            sys::rtcReleaseGeometry(geometry);
-            sys::rtcCommitScene(handle);
             Some(Self {
                 device,
-                scene: handle,
+                scene: scene_of(device, geometry),
                 base: tessellated.base_triangles().to_vec(),
                 allocated,
             })
@@ -286,13 +298,9 @@ impl EmbreeTriangles {
                 sys::rtcReleaseDevice(device);
                 return None;
             };
-            let scene = sys::rtcNewScene(device);
-            sys::rtcAttachGeometry(scene, geometry);
-            sys::rtcReleaseGeometry(geometry);
-            sys::rtcCommitScene(scene);
             Some(Self {
                 device,
-                scene,
+                scene: scene_of(device, geometry),
                 allocated,
             })
         }
