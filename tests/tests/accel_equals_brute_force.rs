@@ -65,6 +65,20 @@ fn compare<T: Real>(
             tally.undecided += 1;
             continue;
         }
+        // The occlusion query: blocked where a hit exists, open before the nearest one.
+        let mut any = TraversalStats::default();
+        assert_eq!(
+            surface.occluded(&ray, T::ZERO, T::INFINITY, &mut any),
+            fast.is_some(),
+            "{o:?} {d:?}"
+        );
+        if let Some(hit) = fast {
+            let half = hit.hit.t / T::TWO;
+            assert!(
+                !surface.occluded(&ray, T::ZERO, half, &mut any),
+                "{o:?} {d:?}"
+            );
+        }
         let agree = match (fast, brute) {
             (None, None) => true,
             (Some(a), Some(b)) => {

@@ -42,6 +42,20 @@ fn compare<T: Real>(
         let fast = surface.intersect(&ray, T::ZERO, T::INFINITY, &mut stats);
         tests += u64::from(stats.texel_tests);
         let brute = surface.intersect_brute_force(&ray, T::ZERO, T::INFINITY);
+        // The occlusion query: blocked where a hit exists, open before the nearest one.
+        let mut any = TraversalStats::default();
+        assert_eq!(
+            surface.occluded(&ray, T::ZERO, T::INFINITY, &mut any),
+            fast.is_some(),
+            "{o:?} {d:?}"
+        );
+        if let Some(hit) = fast {
+            let half = hit.hit.t / T::TWO;
+            assert!(
+                !surface.occluded(&ray, T::ZERO, half, &mut any),
+                "{o:?} {d:?}"
+            );
+        }
         let agree = match (fast, brute) {
             (None, None) => true,
             (Some(a), Some(b)) => {

@@ -160,6 +160,19 @@ mod tests {
             let curved = surface.intersect(&ray, T::ZERO, T::INFINITY, &mut stats);
             let truth = reference.intersect(&wide_ray, 0.0, f64::INFINITY, &mut stats);
             let brute = surface.intersect_brute_force(&ray, T::ZERO, T::INFINITY);
+            surface.set_straight_walk(true);
+            assert_eq!(
+                surface.occluded(&ray, T::ZERO, T::INFINITY, &mut stats),
+                straight.is_some(),
+                "{ray:?}"
+            );
+            if let Some(s) = straight {
+                let half = s.hit.t / T::TWO;
+                assert!(
+                    !surface.occluded(&ray, T::ZERO, half, &mut stats),
+                    "{ray:?}"
+                );
+            }
             assert_eq!(
                 straight.is_some(),
                 truth.is_some(),

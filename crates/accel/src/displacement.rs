@@ -111,6 +111,34 @@ pub struct SurfaceHit<T: Real> {
     pub part: TexelPart,
 }
 
+/// What a TLAS walk looks for: the nearest hit, or any (an occlusion query).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Query {
+    /// The nearest hit.
+    Nearest,
+    /// Any hit: the first prism holding one ends the walk.
+    Any,
+}
+
+impl Query {
+    /// The TLAS's range's upper end after a hit at `t`: `t` for the nearest hit; for any
+    /// hit, below every box's entry, which ends the walk.
+    #[inline]
+    pub(crate) fn range_after<T: Real>(self, t: T) -> T {
+        match self {
+            Query::Nearest => t,
+            Query::Any => T::NEG_INFINITY,
+        }
+    }
+
+    /// Whether the walk has what it looks for, given the range's upper end (the prisms of a
+    /// leaf after the one that ended an any-hit walk are not walked).
+    #[inline]
+    pub(crate) fn is_done<T: Real>(self, t_max: T) -> bool {
+        self == Query::Any && t_max == T::NEG_INFINITY
+    }
+}
+
 /// A displacement-mapped mesh: base mesh, height field, height scale and tiling, with the
 /// TLAS over its prisms and the per-triangle roots into the height field's pyramid.
 #[derive(Clone, Debug)]
@@ -682,39 +710,64 @@ impl<T: Real> DisplacedSurface<T> {
         t_max: T,
         stats: &mut TraversalStats,
     ) -> Option<SurfaceHit<T>> {
+        self.walk_tlas(ray, [t_min, t_max], Query::Nearest, stats)
+    }
+
+    /// Whether `ray` meets the surface at some `t` in `[t_min, t_max]` (a shadow ray's
+    /// query): as [`DisplacedSurface::intersect`], but the first prism that holds a hit ends
+    /// the search, where the nearest hit would go on to the prisms whose boxes the ray
+    /// enters before that hit.
+    pub fn occluded(&self, ray: &Ray<T>, t_min: T, t_max: T, stats: &mut TraversalStats) -> bool {
+        self.walk_tlas(ray, [t_min, t_max], Query::Any, stats)
+            .is_some()
+    }
+
+    /// The TLAS walk of [`DisplacedSurface::intersect`] and [`DisplacedSurface::occluded`].
+    fn walk_tlas(
+        &self,
+        ray: &Ray<T>,
+        [t_min, t_max]: [T; 2],
+        query: Query,
+        stats: &mut TraversalStats,
+    ) -> Option<SurfaceHit<T>> {
         // Eq. 6's frame depends on the ray alone: set up once for all its prisms.
         let frame = ray.perpendiculars();
+        let nearest_in = |tri: usize, prism: &Prism<T>, t_max: T, stats: &mut TraversalStats| {
+            if self.straight_walk
+                && let Some((line, triangle)) = self.straight.line(tri, ray, t_min)
+            {
+                // An affine patch has no seam edge (a seam's two sides differ in uv): no wall.
+                let roots = self.prisms.roots(tri);
+                let found =
+                    walk_straight(&self.field, roots, line?, triangle, t_min, t_max, stats)?;
+                let mut hit = found.hit;
+                let uv = prism.texture_uv(hit.alpha, hit.beta);
+                (hit.u, hit.v) = (uv.x(), uv.y());
+                return Some(SurfaceHit {
+                    hit,
+                    triangle: tri as u32,
+                    texel: found.texel,
+                    part: match found.part {
+                        0 => TexelPart::Lower,
+                        1 => TexelPart::Upper,
+                        _ => TexelPart::Flat,
+                    },
+                });
+            }
+            let nl = NonlinearRay::with_perpendiculars(prism, ray, frame);
+            // See `PrismTlas::intersect`: finite for a ray that entered the prism's box.
+            debug_assert!(nl.is_finite(), "{nl:?} in {prism:?}");
+            let hit = self.intersect_blas(tri, prism, &nl, t_min, t_max, stats);
+            self.nearer_wall_hit(tri, prism, &nl, t_min, t_max, hit)
+        };
         self.prisms
             .traverse(ray, t_min, t_max, |tri, prism, t_max| {
-                stats.prism_tests += 1;
-                if self.straight_walk
-                    && let Some((line, triangle)) = self.straight.line(tri, ray, t_min)
-                {
-                    // An affine patch has no seam edge (a seam's two sides differ in uv): no wall.
-                    let roots = self.prisms.roots(tri);
-                    let found =
-                        walk_straight(&self.field, roots, line?, triangle, t_min, t_max, stats)?;
-                    let mut hit = found.hit;
-                    let uv = prism.texture_uv(hit.alpha, hit.beta);
-                    (hit.u, hit.v) = (uv.x(), uv.y());
-                    let hit = SurfaceHit {
-                        hit,
-                        triangle: tri as u32,
-                        texel: found.texel,
-                        part: match found.part {
-                            0 => TexelPart::Lower,
-                            1 => TexelPart::Upper,
-                            _ => TexelPart::Flat,
-                        },
-                    };
-                    return Some((hit, hit.hit.t));
+                if query.is_done(t_max) {
+                    return None;
                 }
-                let nl = NonlinearRay::with_perpendiculars(prism, ray, frame);
-                // See `PrismTlas::intersect`: finite for a ray that entered the prism's box.
-                debug_assert!(nl.is_finite(), "{nl:?} in {prism:?}");
-                let hit = self.intersect_blas(tri, prism, &nl, t_min, t_max, stats);
-                let hit = self.nearer_wall_hit(tri, prism, &nl, t_min, t_max, hit)?;
-                Some((hit, hit.hit.t))
+                stats.prism_tests += 1;
+                let hit = nearest_in(tri, prism, t_max, stats)?;
+                Some((hit, query.range_after(hit.hit.t)))
             })
     }
 

@@ -14,6 +14,7 @@ use nlrt_shellmap::{
 
 use crate::bvh::{Aabb, Bvh4};
 use crate::cells::{CURVE_STACK, CellSize, walk_cells};
+use crate::displacement::Query;
 use crate::mesh::{BaseMesh, MeshError};
 use crate::object_edges::ObjectEdges;
 use crate::pose::{PoseUpdate, TlasUpdate};
@@ -508,6 +509,25 @@ impl<T: Real> ShellSurface<T> {
         t_max: T,
         stats: &mut TraversalStats,
     ) -> Option<ShellHit<T>> {
+        self.walk_tlas(ray, [t_min, t_max], Query::Nearest, stats)
+    }
+
+    /// Whether `ray` meets the object at some `t` in `[t_min, t_max]` (a shadow ray's
+    /// query): as [`ShellSurface::intersect`], but the first prism that holds a hit ends the
+    /// search.
+    pub fn occluded(&self, ray: &Ray<T>, t_min: T, t_max: T, stats: &mut TraversalStats) -> bool {
+        self.walk_tlas(ray, [t_min, t_max], Query::Any, stats)
+            .is_some()
+    }
+
+    /// The TLAS walk of [`ShellSurface::intersect`] and [`ShellSurface::occluded`].
+    fn walk_tlas(
+        &self,
+        ray: &Ray<T>,
+        [t_min, t_max]: [T; 2],
+        query: Query,
+        stats: &mut TraversalStats,
+    ) -> Option<ShellHit<T>> {
         if traced_in_f64::<T>() {
             // Traced in `f64` (see `intersect_blas`): each prism's nonlinear ray is set up in
             // `f64` directly, with the ray's part once, not first in `T`.
@@ -516,19 +536,25 @@ impl<T: Real> ShellSurface<T> {
             return self
                 .prisms
                 .traverse(ray, t_min, t_max, |tri, prism, t_max| {
+                    if query.is_done(t_max) {
+                        return None;
+                    }
                     stats.prism_tests += 1;
                     stats.f64_prisms += 1;
                     let (prism, nl) = wide.in_prism(prism);
                     let (search, t_max) = (Search::Walk, t_max.to_f64());
                     let hit = self.search_in(search, tri, &prism, &nl, t_min_f64, t_max, stats)?;
                     let hit = Self::narrowed(hit);
-                    Some((hit, hit.hit.t))
+                    Some((hit, query.range_after(hit.hit.t)))
                 });
         }
         self.prisms
             .intersect(ray, t_min, t_max, stats, |tri, prism, nl, t_max, stats| {
+                if query.is_done(t_max) {
+                    return None;
+                }
                 let hit = self.intersect_blas(tri, prism, nl, t_min, t_max, stats)?;
-                Some((hit, hit.hit.t))
+                Some((hit, query.range_after(hit.hit.t)))
             })
     }
 

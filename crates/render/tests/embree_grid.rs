@@ -25,6 +25,12 @@ fn grids_hit_where_the_triangle_mesh_does() {
             let a = grids.intersect(eye, dir, 0.0, f64::INFINITY);
             let b = triangles.intersect(eye, dir, 0.0, f64::INFINITY);
             assert_eq!(a.is_some(), b.is_some(), "{name} ray {k}");
+            // Embree's any-hit query (`rtcOccluded1`) agrees on both.
+            assert_eq!(grids.occluded(eye, dir, 0.0, f64::INFINITY), a.is_some());
+            assert_eq!(
+                triangles.occluded(eye, dir, 0.0, f64::INFINITY),
+                b.is_some()
+            );
             if let (Some(a), Some(b)) = (a, b) {
                 hits += 1;
                 assert!(

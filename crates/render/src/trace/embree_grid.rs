@@ -100,6 +100,10 @@ impl Tracer for EmbreeGrids {
     fn memory_bytes(&self) -> usize {
         self.allocated.bytes() + self.grids.memory_bytes()
     }
+
+    fn occluded(&self, origin: DVec3, dir: DVec3, t_min: f64, t_max: f64) -> bool {
+        crate::trace::embree_reference::occluded1(self.scene, origin, dir, t_min, t_max)
+    }
 }
 
 impl Drop for EmbreeGrids {

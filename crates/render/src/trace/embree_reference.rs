@@ -248,6 +248,40 @@ pub(crate) fn intersect1(
     })
 }
 
+/// Whether anything in a committed Embree `scene` lies on the ray within `(t_min, t_max)`:
+/// Embree's any-hit query (`rtcOccluded1`, incoherent), a shadow ray.
+pub(crate) fn occluded1(
+    scene: sys::RTCScene,
+    origin: DVec3,
+    dir: DVec3,
+    t_min: f64,
+    t_max: f64,
+) -> bool {
+    let mut ray = sys::RTCRay {
+        org_x: origin.x as f32,
+        org_y: origin.y as f32,
+        org_z: origin.z as f32,
+        tnear: t_min as f32,
+        dir_x: dir.x as f32,
+        dir_y: dir.y as f32,
+        dir_z: dir.z as f32,
+        time: 0.0,
+        tfar: if t_max.is_finite() {
+            t_max as f32
+        } else {
+            f32::INFINITY
+        },
+        mask: u32::MAX,
+        id: 0,
+        flags: 0,
+    };
+    let mut context = embree::IntersectContext::incoherent();
+    // SAFETY: the scene is committed and alive; the ray is Embree's own layout.
+    unsafe { sys::rtcOccluded1(scene, &mut context, &mut ray) };
+    // Embree marks an occluded ray by setting its `tfar` to minus infinity.
+    ray.tfar == f32::NEG_INFINITY
+}
+
 impl Tracer for EmbreeTessellated {
     fn intersect(&self, origin: DVec3, dir: DVec3, t_min: f64, t_max: f64) -> Option<TraceHit> {
         let hit = intersect1(self.scene, origin, dir, t_min, t_max)?;
@@ -260,6 +294,10 @@ impl Tracer for EmbreeTessellated {
 
     fn memory_bytes(&self) -> usize {
         self.allocated.bytes()
+    }
+
+    fn occluded(&self, origin: DVec3, dir: DVec3, t_min: f64, t_max: f64) -> bool {
+        occluded1(self.scene, origin, dir, t_min, t_max)
     }
 }
 
@@ -319,6 +357,10 @@ impl Tracer for EmbreeTriangles {
 
     fn memory_bytes(&self) -> usize {
         self.allocated.bytes()
+    }
+
+    fn occluded(&self, origin: DVec3, dir: DVec3, t_min: f64, t_max: f64) -> bool {
+        occluded1(self.scene, origin, dir, t_min, t_max)
     }
 }
 

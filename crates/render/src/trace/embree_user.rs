@@ -226,28 +226,7 @@ impl EmbreeWithSurface {
     /// any-hit query (`rtcOccluded1`), a shadow ray.
     #[must_use]
     pub fn occluded(&self, origin: DVec3, dir: DVec3, t_max: f64) -> bool {
-        let mut ray = sys::RTCRay {
-            org_x: origin.x as f32,
-            org_y: origin.y as f32,
-            org_z: origin.z as f32,
-            tnear: 0.0,
-            dir_x: dir.x as f32,
-            dir_y: dir.y as f32,
-            dir_z: dir.z as f32,
-            time: 0.0,
-            tfar: if t_max.is_finite() {
-                t_max as f32
-            } else {
-                f32::INFINITY
-            },
-            mask: u32::MAX,
-            id: 0,
-            flags: 0,
-        };
-        let mut context = embree::IntersectContext::incoherent();
-        // SAFETY: the scene is committed and alive; the ray is Embree's own layout.
-        unsafe { sys::rtcOccluded1(self.scene, &mut context, &mut ray) };
-        ray.tfar == f32::NEG_INFINITY
+        crate::trace::embree_reference::occluded1(self.scene, origin, dir, 0.0, t_max)
     }
 
     /// Bytes Embree allocated (its BVH and the triangles' buffers), the surface's own beside.
@@ -278,6 +257,10 @@ impl Tracer for EmbreeWithSurface {
 
     fn memory_bytes(&self) -> usize {
         self.allocated.bytes() + self.surface.memory_bytes()
+    }
+
+    fn occluded(&self, origin: DVec3, dir: DVec3, t_min: f64, t_max: f64) -> bool {
+        crate::trace::embree_reference::occluded1(self.scene, origin, dir, t_min, t_max)
     }
 }
 

@@ -130,11 +130,10 @@ fn render_with(
             let mut depths = Vec::with_capacity(w);
             let mut aovs = Vec::with_capacity(w);
             let mut recorded = Vec::new();
-            let mut trace = |origin: DVec3, dir: DVec3, kind: RayKind| {
+            let mut cast = |origin: DVec3, dir: DVec3, kind: RayKind| {
                 if record {
                     recorded.push(StreamRay { origin, dir, kind });
                 }
-                tracer.intersect(origin, dir, 0.0, f64::INFINITY)
             };
             let (mut n_primary, mut n_all) = (0u64, 0u64);
             for x in 0..w {
@@ -164,7 +163,8 @@ fn render_with(
                         } else {
                             RayKind::Bounce
                         };
-                        let Some(hit) = trace(origin, dir, kind) else {
+                        cast(origin, dir, kind);
+                        let Some(hit) = tracer.intersect(origin, dir, 0.0, f64::INFINITY) else {
                             sum += throughput * sky(dir);
                             break;
                         };
@@ -181,7 +181,9 @@ fn render_with(
                         let cos = n.dot(scene.sun);
                         if cos > 0.0 {
                             n_all += 1;
-                            if trace(p, scene.sun, RayKind::Shadow).is_none() {
+                            // A shadow ray asks only whether anything is in the way.
+                            cast(p, scene.sun, RayKind::Shadow);
+                            if !tracer.occluded(p, scene.sun, 0.0, f64::INFINITY) {
                                 let brdf_pi = material.brdf_times_pi(n, dir, scene.sun);
                                 sum += throughput * sun_radiance * (brdf_pi * cos);
                             }

@@ -110,6 +110,17 @@ impl<T: Real> Tracer for Nonlinear<T> {
             Self::Shell(s) => s.memory_bytes(),
         }
     }
+
+    fn occluded(&self, origin: DVec3, dir: DVec3, t_min: f64, t_max: f64) -> bool {
+        let Some((ray, t_min, t_max)) = ray_in::<T>(origin, dir, t_min, t_max) else {
+            return false;
+        };
+        let mut stats = TraversalStats::default();
+        match self {
+            Self::Displaced(s) => s.occluded(&ray, t_min, t_max, &mut stats),
+            Self::Shell(s) => s.occluded(&ray, t_min, t_max, &mut stats),
+        }
+    }
 }
 
 /// Tessellation-free displacement mapping (Thonat et al. 2021) in precision `T`, on the same

@@ -77,6 +77,12 @@ impl<Tr: Tracer> Tracer for ObjectUnion<Tr> {
     fn memory_bytes(&self) -> usize {
         self.parts.iter().map(|(t, _)| t.memory_bytes()).sum()
     }
+
+    fn occluded(&self, origin: DVec3, dir: DVec3, t_min: f64, t_max: f64) -> bool {
+        self.parts
+            .iter()
+            .any(|(tracer, _)| tracer.occluded(origin, dir, t_min, t_max))
+    }
 }
 
 #[cfg(test)]
@@ -123,6 +129,8 @@ mod tests {
         assert_eq!(hit(3.0, f64::INFINITY).map(|h| (h.t, h.id)), Some((5.0, 2)));
         assert_eq!(hit(0.0, 2.5), None);
         assert_eq!(hit(5.0, 9.0), None);
+        let blocked = |t_min, t_max| union.occluded(DVec3::ZERO, DVec3::X, t_min, t_max);
+        assert!(blocked(0.0, 3.0) && blocked(4.0, 5.0) && !blocked(0.0, 2.5) && !blocked(5.0, 9.0));
         assert_eq!(union.memory_bytes(), 24);
     }
 }

@@ -126,10 +126,12 @@ pub fn replay(tracer: &dyn Tracer, stream: &RayStream, kind: Option<RayKind>) ->
         .map(|chunk| {
             chunk
                 .iter()
-                .filter(|r| {
-                    tracer
+                .filter(|r| match r.kind {
+                    // As the render asks them: a shadow ray only whether it is blocked.
+                    RayKind::Shadow => tracer.occluded(r.origin, r.dir, 0.0, f64::INFINITY),
+                    _ => tracer
                         .intersect(r.origin, r.dir, 0.0, f64::INFINITY)
-                        .is_some()
+                        .is_some(),
                 })
                 .count() as u64
         })

@@ -52,11 +52,21 @@ pub trait Tracer: Sync {
     fn intersect(&self, origin: DVec3, dir: DVec3, t_min: f64, t_max: f64) -> Option<TraceHit>;
     /// Bytes of acceleration data.
     fn memory_bytes(&self) -> usize;
+    /// Whether the ray meets the scene at some distance in `(t_min, t_max]` (a shadow ray's
+    /// query). The default asks [`Tracer::intersect`]; a method may stop at the first hit it
+    /// finds.
+    fn occluded(&self, origin: DVec3, dir: DVec3, t_min: f64, t_max: f64) -> bool {
+        self.intersect(origin, dir, t_min, t_max).is_some()
+    }
 }
 
 impl<Tr: Tracer + ?Sized> Tracer for &Tr {
     fn intersect(&self, origin: DVec3, dir: DVec3, t_min: f64, t_max: f64) -> Option<TraceHit> {
         (**self).intersect(origin, dir, t_min, t_max)
+    }
+
+    fn occluded(&self, origin: DVec3, dir: DVec3, t_min: f64, t_max: f64) -> bool {
+        (**self).occluded(origin, dir, t_min, t_max)
     }
 
     fn memory_bytes(&self) -> usize {
@@ -67,6 +77,10 @@ impl<Tr: Tracer + ?Sized> Tracer for &Tr {
 impl<Tr: Tracer + ?Sized> Tracer for Box<Tr> {
     fn intersect(&self, origin: DVec3, dir: DVec3, t_min: f64, t_max: f64) -> Option<TraceHit> {
         (**self).intersect(origin, dir, t_min, t_max)
+    }
+
+    fn occluded(&self, origin: DVec3, dir: DVec3, t_min: f64, t_max: f64) -> bool {
+        (**self).occluded(origin, dir, t_min, t_max)
     }
 
     fn memory_bytes(&self) -> usize {
