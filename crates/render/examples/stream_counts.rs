@@ -10,7 +10,9 @@
 //! `f32` (1 spp, one bounce, as the bench), then traced one ray at a time on this thread by
 //! the `f32` and the `f64` surface (and, where the scene has affine patches, both again with
 //! the curved walk on every prism), each kind of ray in turn, interleaved over `ROUNDS`
-//! rounds; the time printed is each kind's median over the rounds.
+//! rounds; the time printed is each kind's median over the rounds. Shadow rays are traced
+//! twice: for their nearest hit and, as the renderer asks them, as occlusion queries (the
+//! totals count the latter).
 
 use nlrt_accel::TraversalStats;
 use nlrt_poly::{Real, Vector3};
@@ -28,9 +30,14 @@ mod common;
 /// The name in error messages.
 const PROGRAM: &str = "stream_counts";
 
-/// Traces `rays` one at a time; returns the hits and the counters.
+/// Traces `rays` one at a time (the nearest hit, or with `any` the occlusion query a
+/// renderer asks of a shadow ray); returns the hits and the counters.
 #[inline(never)]
-fn trace_stream<T: Real>(nl: &Nonlinear<T>, rays: &[StreamRay]) -> (u64, TraversalStats) {
+fn trace_stream<T: Real>(
+    nl: &Nonlinear<T>,
+    rays: &[StreamRay],
+    any: bool,
+) -> (u64, TraversalStats) {
     let mut stats = TraversalStats::default();
     let v = |a: nlrt_poly::glam::DVec3| {
         T::Vec3::new(T::from_f64(a.x), T::from_f64(a.y), T::from_f64(a.z))
@@ -40,13 +47,15 @@ fn trace_stream<T: Real>(nl: &Nonlinear<T>, rays: &[StreamRay]) -> (u64, Travers
         let Some(ray) = Ray::new(v(r.origin), v(r.dir)) else {
             continue;
         };
-        let hit = match nl {
-            Nonlinear::Displaced(s) => s
+        let hit = match (nl, any) {
+            (Nonlinear::Displaced(s), false) => s
                 .intersect(&ray, T::ZERO, T::INFINITY, &mut stats)
                 .is_some(),
-            Nonlinear::Shell(s) => s
+            (Nonlinear::Shell(s), false) => s
                 .intersect(&ray, T::ZERO, T::INFINITY, &mut stats)
                 .is_some(),
+            (Nonlinear::Displaced(s), true) => s.occluded(&ray, T::ZERO, T::INFINITY, &mut stats),
+            (Nonlinear::Shell(s), true) => s.occluded(&ray, T::ZERO, T::INFINITY, &mut stats),
         };
         hits += u64::from(hit);
     }
@@ -114,10 +123,13 @@ fn main() {
     .into_iter()
     .flatten()
     .collect();
+    // Shadow rays twice: for the nearest hit, and as the renderer asks them (any hit); the
+    // totals count them once, as asked.
     let kinds = [
-        ("primary", RayKind::Primary),
-        ("shadow", RayKind::Shadow),
-        ("bounce", RayKind::Bounce),
+        ("primary", RayKind::Primary, false),
+        ("shadow (nearest)", RayKind::Shadow, false),
+        ("shadow", RayKind::Shadow, true),
+        ("bounce", RayKind::Bounce, false),
     ];
     let rays_of = |kind| -> Vec<StreamRay> {
         stream
@@ -136,7 +148,7 @@ fn main() {
         "kind | variant | rays | hits | us per ray | speed against the first | per ray: prisms | nodes | texel tests | prisms in f64"
     );
     let mut total = vec![0.0; variants.len()];
-    for (label, kind) in kinds {
+    for (label, kind, any) in kinds {
         let rays = rays_of(kind);
         if rays.is_empty() {
             continue;
@@ -146,7 +158,7 @@ fn main() {
         for _ in 0..ROUNDS {
             for (i, (_, variant)) in variants.iter().enumerate() {
                 let t = Instant::now();
-                results[i] = Some(variant.trace(&rays));
+                results[i] = Some(variant.trace(&rays, any));
                 seconds[i].push(t.elapsed().as_secs_f64());
             }
         }
@@ -156,7 +168,9 @@ fn main() {
             let Some((hits, st)) = results[i] else {
                 continue;
             };
-            total[i] += medians[i];
+            if !(kind == RayKind::Shadow && !any) {
+                total[i] += medians[i];
+            }
             println!(
                 "{label} | {variant} | {} | {hits} | {:.3} | {:.2} | {:.2} | {:.2} | {:.2} | {:.4}",
                 rays.len(),
@@ -188,10 +202,10 @@ enum Variant {
 }
 
 impl Variant {
-    fn trace(&self, rays: &[StreamRay]) -> (u64, TraversalStats) {
+    fn trace(&self, rays: &[StreamRay], any: bool) -> (u64, TraversalStats) {
         match self {
-            Variant::Narrow(nl) => trace_stream(nl, rays),
-            Variant::Wide(nl) => trace_stream(nl, rays),
+            Variant::Narrow(nl) => trace_stream(nl, rays, any),
+            Variant::Wide(nl) => trace_stream(nl, rays, any),
         }
     }
 }
