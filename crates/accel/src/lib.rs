@@ -33,6 +33,10 @@
 //! let ray = Ray::new(DVec3::new(0.3, 0.6, 2.0), -DVec3::Z).unwrap();
 //! let hit = surface.intersect(&ray, 0.0, f64::INFINITY, &mut TraversalStats::default()).unwrap();
 //! assert!((hit.hit.t - 1.5).abs() < 1e-12);
+//! // A shadow ray asks only whether something is in the way (the first hit found ends it).
+//! let up = Ray::new(DVec3::new(0.3, 0.6, 0.2), DVec3::Z).unwrap();
+//! assert!(surface.occluded(&up, 0.0, f64::INFINITY, &mut TraversalStats::default()));
+//! assert!(!surface.occluded(&up, 0.0, 0.2, &mut TraversalStats::default()));
 //! ```
 #![no_std]
 #![warn(missing_docs)]
