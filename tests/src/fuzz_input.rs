@@ -398,7 +398,8 @@ pub const AFFINE_BASELINE_CELLS: i64 = 1 << 22;
 /// from the straight walk (the triangle as given where its three directions are equal, and
 /// again with its first direction at every corner) and the curved one;
 /// and the curved walk's hit is never nearer than the brute-force one (the traversal tests a
-/// subset of the same texels with the same arithmetic), checked when the texel range is small.
+/// subset of the same texels with the same arithmetic), checked when the texel range is small;
+/// the occlusion query agrees with the curved walk's nearest hit on whether there is one.
 pub fn fuzz_displacement<T: Real>(data: &[u8]) {
     use nlrt_accel::TraversalStats;
     use nlrt_baselines::{AffineTracing, ConeTraced, Marching};
@@ -426,6 +427,12 @@ pub fn fuzz_displacement<T: Real>(data: &[u8]) {
     if let Some(hit) = fast {
         check_traversal_hit(&hit.hit, &hit);
     }
+    // The occlusion query asks the same prisms with the same range until one holds a hit.
+    assert_eq!(
+        surface.occluded(&ray, T::ZERO, T::INFINITY, &mut TraversalStats::default()),
+        fast.is_some(),
+        "occlusion query against {fast:?}"
+    );
     let [x0, y0, x1, y1] = surface.roots(0).texels.map(i64::from);
     // The brute force tests every texel in the walk's arithmetic: not comparable where the
     // walk met a decision `f32` could not make and traced the prism in `f64`.
@@ -693,13 +700,20 @@ pub fn shell_case<T: Real>(
 
 /// The shell traversal target: up to four object triangles in the unit tile (raw values;
 /// out-of-tile objects must be rejected cleanly), tiling 1 to 8, one base triangle and a
-/// ray. Same properties as [`fuzz_displacement`].
+/// ray. Same properties as [`fuzz_displacement`], and the occlusion query agrees with the
+/// nearest hit on whether there is one.
 pub fn fuzz_shell<T: Real>(data: &[u8]) {
     use nlrt_accel::TraversalStats;
     let Ok((surface, ray)) = shell_case::<T>(data) else {
         return;
     };
     let fast = surface.intersect(&ray, T::ZERO, T::INFINITY, &mut TraversalStats::default());
+    // The occlusion query asks the same prisms with the same range until one holds a hit.
+    assert_eq!(
+        surface.occluded(&ray, T::ZERO, T::INFINITY, &mut TraversalStats::default()),
+        fast.is_some(),
+        "occlusion query against {fast:?}"
+    );
     if let Some(hit) = fast {
         let h = hit.hit;
         check_traversal_hit(&h, &hit);
