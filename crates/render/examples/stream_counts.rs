@@ -168,7 +168,8 @@ fn main() {
             let Some((hits, st)) = results[i] else {
                 continue;
             };
-            if !(kind == RayKind::Shadow && !any) {
+            // Shadow rays count once, as the occlusion queries the renderer asks.
+            if kind != RayKind::Shadow || any {
                 total[i] += medians[i];
             }
             println!(
