@@ -17,7 +17,7 @@ use crate::pose::{PoseUpdate, TlasUpdate};
 use crate::precision::{PrismSearch, Search};
 use crate::seam::{SeamRule, Seams};
 use crate::stats::TraversalStats;
-use crate::tlas::{MAX_TEXEL_COORDINATE, MAX_TEXEL_RANGE, PrismTlas, RootNodes, SetupError};
+use crate::tlas::{MAX_TEXEL_COORDINATE, MAX_TEXEL_RANGE, PrismTlas, Query, RootNodes, SetupError};
 
 /// Why a displaced surface could not be built.
 #[derive(Clone, Debug, PartialEq)]
@@ -109,34 +109,6 @@ pub struct SurfaceHit<T: Real> {
     pub texel: [i32; 2],
     /// Part of the texel.
     pub part: TexelPart,
-}
-
-/// What a TLAS walk looks for: the nearest hit, or any (an occlusion query).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum Query {
-    /// The nearest hit.
-    Nearest,
-    /// Any hit: the first prism holding one ends the walk.
-    Any,
-}
-
-impl Query {
-    /// The TLAS's range's upper end after a hit at `t`: `t` for the nearest hit; for any
-    /// hit, below every box's entry, which ends the walk.
-    #[inline]
-    pub(crate) fn range_after<T: Real>(self, t: T) -> T {
-        match self {
-            Query::Nearest => t,
-            Query::Any => T::NEG_INFINITY,
-        }
-    }
-
-    /// Whether the walk has what it looks for, given the range's upper end (the prisms of a
-    /// leaf after the one that ended an any-hit walk are not walked).
-    #[inline]
-    pub(crate) fn is_done<T: Real>(self, t_max: T) -> bool {
-        self == Query::Any && t_max == T::NEG_INFINITY
-    }
 }
 
 /// A displacement-mapped mesh: base mesh, height field, height scale and tiling, with the

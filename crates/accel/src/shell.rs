@@ -14,14 +14,13 @@ use nlrt_shellmap::{
 
 use crate::bvh::{Aabb, Bvh4};
 use crate::cells::{CURVE_STACK, CellSize, walk_cells};
-use crate::displacement::Query;
 use crate::mesh::{BaseMesh, MeshError};
 use crate::object_edges::ObjectEdges;
 use crate::pose::{PoseUpdate, TlasUpdate};
 use crate::precision::{PrismSearch, Search};
 use crate::stack::SpillStack;
 use crate::stats::TraversalStats;
-use crate::tlas::{MAX_TEXEL_COORDINATE, MAX_TEXEL_RANGE, PrismTlas, RootNodes, SetupError};
+use crate::tlas::{MAX_TEXEL_COORDINATE, MAX_TEXEL_RANGE, PrismTlas, Query, RootNodes, SetupError};
 
 /// Why a shell object or surface was rejected.
 #[derive(Clone, Debug, PartialEq)]

@@ -102,6 +102,34 @@ pub(crate) fn within_world_range<T: Real>(prism: &Prism<T>) -> bool {
         .any(beyond_world_range::<T>)
 }
 
+/// What a TLAS walk looks for: the nearest hit, or any (an occlusion query).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Query {
+    /// The nearest hit.
+    Nearest,
+    /// Any hit: the first prism holding one ends the walk.
+    Any,
+}
+
+impl Query {
+    /// The TLAS's range's upper end after a hit at `t`: `t` for the nearest hit; for any
+    /// hit, below every box's entry, which ends the walk.
+    #[inline]
+    pub(crate) fn range_after<T: Real>(self, t: T) -> T {
+        match self {
+            Query::Nearest => t,
+            Query::Any => T::NEG_INFINITY,
+        }
+    }
+
+    /// Whether the walk has what it looks for, given the range's upper end (the prisms of a
+    /// leaf after the one that ended an any-hit walk are not walked).
+    #[inline]
+    pub(crate) fn is_done<T: Real>(self, t_max: T) -> bool {
+        self == Query::Any && t_max == T::NEG_INFINITY
+    }
+}
+
 /// A base mesh's prisms with their TLAS and per-triangle root cells.
 #[derive(Clone, Debug)]
 pub(crate) struct PrismTlas<T: Real> {
