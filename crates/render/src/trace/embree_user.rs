@@ -150,6 +150,35 @@ unsafe extern "C" fn surface_intersect(args: *const sys::RTCIntersectFunctionNAr
     }
 }
 
+/// Whether nlrt's surface blocks lane `i` of a packet within its `(tnear, tfar)`: its
+/// occlusion query, which stops at the first prism holding a hit.
+///
+/// # Safety
+/// As [`lane`].
+unsafe fn occluded_lane(
+    surface: &DisplacedSurface<f32>,
+    packet: *mut u32,
+    n: usize,
+    i: usize,
+) -> bool {
+    // SAFETY: as the caller's contract.
+    let read = |field: usize| unsafe { *lane::<f32>(packet, n, field, i) };
+    let origin = Vec3::new(read(ORG), read(ORG + 1), read(ORG + 2));
+    let dir = Vec3::new(read(DIR), read(DIR + 1), read(DIR + 2));
+    let (tnear, tfar) = (read(TNEAR), read(TFAR));
+    // nlrt's rays have unit directions: distances scale by the direction's length.
+    let length = dir.length();
+    let Some(ray) = Ray::new(origin, dir) else {
+        return false;
+    };
+    surface.occluded(
+        &ray,
+        tnear.max(0.0) * length,
+        tfar * length,
+        &mut TraversalStats::default(),
+    )
+}
+
 /// Embree's occlusion callback: `tfar` set to `-inf` where nlrt finds any hit.
 unsafe extern "C" fn surface_occluded(args: *const sys::RTCOccludedFunctionNArguments) {
     // SAFETY: as `surface_intersect`; an `RTCRayN` packet is the leading part of an
@@ -160,7 +189,7 @@ unsafe extern "C" fn surface_occluded(args: *const sys::RTCOccludedFunctionNArgu
         let n = args.N as usize;
         let packet = args.ray.cast::<u32>();
         for i in 0..n {
-            if *args.valid.add(i) != 0 && trace_lane(surface, packet, n, i).is_some() {
+            if *args.valid.add(i) != 0 && occluded_lane(surface, packet, n, i) {
                 *lane::<f32>(packet, n, TFAR, i) = f32::NEG_INFINITY;
             }
         }
