@@ -179,3 +179,23 @@ pub fn random_object<T: Real>(n: usize, seed: u64) -> Vec<[T::Vec3; 3]> {
         })
         .collect()
 }
+
+/// Asserts that an occlusion query (`occluded(t_max)` over `[0, t_max]`) agrees with the
+/// nearest hit's distance `nearest` on the same ray: blocked over the whole ray exactly when
+/// there is a hit, and open up to half its distance.
+///
+/// # Panics
+/// Where they disagree, naming `ray`.
+pub fn assert_occlusion_agrees<T: Real>(
+    occluded: impl Fn(T) -> bool,
+    nearest: Option<T>,
+    ray: &dyn core::fmt::Debug,
+) {
+    assert_eq!(occluded(T::INFINITY), nearest.is_some(), "{ray:?}");
+    if let Some(t) = nearest {
+        assert!(
+            !occluded(t / T::TWO),
+            "open before the nearest hit: {ray:?}"
+        );
+    }
+}

@@ -7,7 +7,9 @@
 use nlrt_accel::{DisplacedSurface, TraversalStats, Wrap};
 use nlrt_poly::{Real, Vector3};
 use nlrt_shellmap::Ray;
-use nlrt_tests::geometry::{MapKind, SplitMix64, grid_mesh, height_map, ray_from_above};
+use nlrt_tests::geometry::{
+    MapKind, SplitMix64, assert_occlusion_agrees, grid_mesh, height_map, ray_from_above,
+};
 
 /// Rays per configuration; `NLRT_EXTENSIVE=1` multiplies by 20.
 fn ray_count() -> usize {
@@ -66,19 +68,9 @@ fn compare<T: Real>(
             continue;
         }
         // The occlusion query: blocked where a hit exists, open before the nearest one.
-        let mut any = TraversalStats::default();
-        assert_eq!(
-            surface.occluded(&ray, T::ZERO, T::INFINITY, &mut any),
-            fast.is_some(),
-            "{o:?} {d:?}"
-        );
-        if let Some(hit) = fast {
-            let half = hit.hit.t / T::TWO;
-            assert!(
-                !surface.occluded(&ray, T::ZERO, half, &mut any),
-                "{o:?} {d:?}"
-            );
-        }
+        let blocked =
+            |t_max| surface.occluded(&ray, T::ZERO, t_max, &mut TraversalStats::default());
+        assert_occlusion_agrees(blocked, fast.map(|h| h.hit.t), &(o, d));
         let agree = match (fast, brute) {
             (None, None) => true,
             (Some(a), Some(b)) => {

@@ -4,7 +4,9 @@
 use nlrt_accel::{ShellObject, ShellSurface, TraversalStats};
 use nlrt_poly::{Real, Vector3};
 use nlrt_shellmap::Ray;
-use nlrt_tests::geometry::{SplitMix64, grid_mesh, random_object, ray_from_above};
+use nlrt_tests::geometry::{
+    SplitMix64, assert_occlusion_agrees, grid_mesh, random_object, ray_from_above,
+};
 
 fn ray_count() -> usize {
     if std::env::var_os("NLRT_EXTENSIVE").is_some() {
@@ -43,19 +45,9 @@ fn compare<T: Real>(
         tests += u64::from(stats.texel_tests);
         let brute = surface.intersect_brute_force(&ray, T::ZERO, T::INFINITY);
         // The occlusion query: blocked where a hit exists, open before the nearest one.
-        let mut any = TraversalStats::default();
-        assert_eq!(
-            surface.occluded(&ray, T::ZERO, T::INFINITY, &mut any),
-            fast.is_some(),
-            "{o:?} {d:?}"
-        );
-        if let Some(hit) = fast {
-            let half = hit.hit.t / T::TWO;
-            assert!(
-                !surface.occluded(&ray, T::ZERO, half, &mut any),
-                "{o:?} {d:?}"
-            );
-        }
+        let blocked =
+            |t_max| surface.occluded(&ray, T::ZERO, t_max, &mut TraversalStats::default());
+        assert_occlusion_agrees(blocked, fast.map(|h| h.hit.t), &(o, d));
         let agree = match (fast, brute) {
             (None, None) => true,
             (Some(a), Some(b)) => {

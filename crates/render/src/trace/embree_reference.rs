@@ -191,6 +191,29 @@ pub(crate) struct EmbreeHit {
     pub(crate) v: f32,
 }
 
+/// A renderer ray (f64) as Embree's single-precision ray, its range `[t_min, t_max]` (an
+/// infinite `t_max` stays infinite).
+fn rtc_ray(origin: DVec3, dir: DVec3, t_min: f64, t_max: f64) -> sys::RTCRay {
+    sys::RTCRay {
+        org_x: origin.x as f32,
+        org_y: origin.y as f32,
+        org_z: origin.z as f32,
+        tnear: t_min as f32,
+        dir_x: dir.x as f32,
+        dir_y: dir.y as f32,
+        dir_z: dir.z as f32,
+        time: 0.0,
+        tfar: if t_max.is_finite() {
+            t_max as f32
+        } else {
+            f32::INFINITY
+        },
+        mask: u32::MAX,
+        id: 0,
+        flags: 0,
+    }
+}
+
 /// The nearest hit of one ray in a committed Embree `scene` (`rtcIntersect1`, incoherent).
 pub(crate) fn intersect1(
     scene: sys::RTCScene,
@@ -200,24 +223,7 @@ pub(crate) fn intersect1(
     t_max: f64,
 ) -> Option<EmbreeHit> {
     let mut rayhit = sys::RTCRayHit {
-        ray: sys::RTCRay {
-            org_x: origin.x as f32,
-            org_y: origin.y as f32,
-            org_z: origin.z as f32,
-            tnear: t_min as f32,
-            dir_x: dir.x as f32,
-            dir_y: dir.y as f32,
-            dir_z: dir.z as f32,
-            time: 0.0,
-            tfar: if t_max.is_finite() {
-                t_max as f32
-            } else {
-                f32::INFINITY
-            },
-            mask: u32::MAX,
-            id: 0,
-            flags: 0,
-        },
+        ray: rtc_ray(origin, dir, t_min, t_max),
         hit: sys::RTCHit {
             Ng_x: 0.0,
             Ng_y: 0.0,
@@ -257,24 +263,7 @@ pub(crate) fn occluded1(
     t_min: f64,
     t_max: f64,
 ) -> bool {
-    let mut ray = sys::RTCRay {
-        org_x: origin.x as f32,
-        org_y: origin.y as f32,
-        org_z: origin.z as f32,
-        tnear: t_min as f32,
-        dir_x: dir.x as f32,
-        dir_y: dir.y as f32,
-        dir_z: dir.z as f32,
-        time: 0.0,
-        tfar: if t_max.is_finite() {
-            t_max as f32
-        } else {
-            f32::INFINITY
-        },
-        mask: u32::MAX,
-        id: 0,
-        flags: 0,
-    };
+    let mut ray = rtc_ray(origin, dir, t_min, t_max);
     let mut context = embree::IntersectContext::incoherent();
     // SAFETY: the scene is committed and alive; the ray is Embree's own layout.
     unsafe { sys::rtcOccluded1(scene, &mut context, &mut ray) };
