@@ -22,10 +22,13 @@
 //!   in one frame, so all of them see the same line, bit for bit, and the same hit points; a
 //!   hit belongs to the triangles whose texel-space edges it lies on or inside, each edge's
 //!   function computed from its two corners in one canonical order (the same number in both
-//!   triangles that share it). A patch is walked straight only when it is a whole connected
-//!   part of the mesh (its outer edges are the mesh's border), so that no straight-walked
-//!   triangle shares an edge with a curved-walked one; other affine triangles keep the curved
-//!   path, whose edge windows join them to their neighbours.
+//!   triangles that share it). Where a patch meets another patch (a crease) or a triangle on
+//!   the curved path (a bent direction), the two sides see different lines or a line and a
+//!   curve: there each side owns, beyond the shared edge, the hits within a bound on its own
+//!   hit point's error (the walk's window; the curved path's edge windows do the same), so
+//!   that a hit on either side is owned by that side whatever the other decides. A triangle
+//!   with a uv seam or an edge of more than two triangles keeps the curved path (its seam
+//!   walls are the curved path's).
 
 mod patches;
 mod walk;
@@ -91,17 +94,85 @@ mod tests {
         HeightField::new(side, side, samples, Wrap::Repeat).expect("a valid map")
     }
 
+    /// The base meshes the straight walk is tested on.
+    #[derive(Clone, Copy, Debug, PartialEq)]
+    enum Shape {
+        /// A tilted, sheared 3 x 3 grid whose base edges cross texel diagonals: one patch.
+        Flat,
+        /// A tilted, sheared 4 x 4 grid folded along its middle column line, the directions
+        /// bent at its last column of vertices: two patches meeting at a crease (16 and 8
+        /// triangles), the second beside 8 curved triangles.
+        Mixed,
+    }
+
+    impl Shape {
+        /// Triangles walked straight.
+        fn straight_triangles(self) -> usize {
+            match self {
+                Shape::Flat => 18,
+                Shape::Mixed => 24,
+            }
+        }
+    }
+
+    /// The mesh of `shape`.
+    fn tilted_mesh<T: Real>(shape: Shape) -> BaseMesh<T> {
+        let frame = [[0.3, -0.2, 0.1], [1.7, 0.2, -0.1], [-0.1, 0.3, 1.6]];
+        let n = [0.25, 1.0, 0.1];
+        let uv = ([0.4, 1.3], [0.2, -0.7]);
+        match shape {
+            Shape::Flat => grid::<T>(3, frame, n, uv.0, uv.1),
+            Shape::Mixed => {
+                let k = 4;
+                let flat = grid::<T>(k, frame, n, uv.0, uv.1);
+                let v3 = |a: [f64; 3]| {
+                    T::Vec3::new(T::from_f64(a[0]), T::from_f64(a[1]), T::from_f64(a[2]))
+                };
+                // Vertex `(i, j)` is number `j (k + 1) + i`; positions recomputed in f64 so
+                // that each side of the fold is planar to the rounding of `T`.
+                let positions = (0..(k + 1) * (k + 1))
+                    .map(|v| {
+                        let (a, b) = (
+                            (v % (k + 1)) as f64 / k as f64,
+                            (v / (k + 1)) as f64 / k as f64,
+                        );
+                        let fold = 0.4 * (a - 0.5).max(0.0);
+                        v3(core::array::from_fn(|c| {
+                            frame[0][c] + a * frame[1][c] + b * frame[2][c] + fold * n[c]
+                        }))
+                    })
+                    .collect();
+                let normals = (0..(k + 1) * (k + 1))
+                    .map(|v| {
+                        if v % (k + 1) == k {
+                            v3([0.55, 1.0, 0.3])
+                        } else {
+                            v3(n)
+                        }
+                    })
+                    .collect();
+                BaseMesh::new(
+                    positions,
+                    normals,
+                    flat.uvs().to_vec(),
+                    (0..flat.triangle_count())
+                        .map(|i| flat.triangle(i))
+                        .collect(),
+                )
+                .expect("a valid grid")
+            }
+        }
+    }
+
     /// A tilted grid over a random map, displaced along a direction off its normal.
-    fn tilted_surface<T: Real>(seed: u64) -> DisplacedSurface<T> {
-        let mesh = grid::<T>(
-            3,
-            [[0.3, -0.2, 0.1], [1.7, 0.2, -0.1], [-0.1, 0.3, 1.6]],
-            [0.25, 1.0, 0.1],
-            [0.4, 1.3],
-            [0.2, -0.7],
-        );
-        DisplacedSurface::new(mesh, random_field(16, seed), T::from_f64(0.6), T::ONE)
-            .expect("a valid surface")
+    fn tilted_surface<T: Real>(seed: u64, shape: Shape) -> DisplacedSurface<T> {
+        DisplacedSurface::new(
+            tilted_mesh::<T>(shape),
+            random_field(16, seed),
+            T::from_f64(0.6),
+            T::ONE,
+        )
+        .expect("a valid surface")
     }
 
     /// `mesh` widened to `f64`, exactly.
@@ -119,22 +190,18 @@ mod tests {
 
     /// The straight walk in `T` finds the hits of the curved walk in `f64` on the same mesh
     /// (widened exactly) on rays from every direction at a tilted, sheared grid whose base
-    /// edges cross texel diagonals: the same hit or miss on every ray, distances within `T`'s
-    /// rounding, the same microtriangle but where a hit lies within rounding of an edge; and
-    /// brute force in `T` (every texel of every triangle, the curved test) agrees on whether
-    /// the ray hits. Returns how many rays the curved walk in `T` answers otherwise than
-    /// `f64` (hit or miss, or a distance off by more than the tolerance).
-    fn straight_walk_matches_f64<T: Real>(t_tolerance: f64) -> usize {
-        let mut surface = tilted_surface::<T>(7);
+    /// edges cross texel diagonals (`shape`): the same hit or miss on every ray, distances
+    /// within `T`'s rounding, the same microtriangle but where a hit lies within rounding of
+    /// an edge; and brute force in `T` (every texel of every triangle, the curved test)
+    /// agrees on whether the ray hits. Returns how many rays the curved walk in `T` answers
+    /// otherwise than `f64` (hit or miss, or a distance off by more than the tolerance).
+    fn straight_walk_matches_f64<T: Real>(shape: Shape, t_tolerance: f64) -> usize {
+        let mut surface = tilted_surface::<T>(7, shape);
         let wide = widened(surface.mesh());
         let mut reference =
             DisplacedSurface::new(wide, random_field(16, 7), 0.6, 1.0).expect("a valid surface");
         reference.set_straight_walk(false);
-        assert_eq!(
-            surface.straight_triangles(),
-            18,
-            "every triangle of the grid"
-        );
+        assert_eq!(surface.straight_triangles(), shape.straight_triangles());
         let mut r = unit_randoms(11);
         let (mut hits, mut same_part, mut curved_off) = (0, 0, 0);
         for _ in 0..3000 {
@@ -207,19 +274,32 @@ mod tests {
         // The curved walk in f32 differs from f64 on one of these rays (a nearer hit where
         // f64 has none: docs/watertightness.md, "Straight rays in affine prisms"); the
         // straight walk on none.
-        let curved_off = straight_walk_matches_f64::<f32>(1e-4);
+        let curved_off = straight_walk_matches_f64::<f32>(Shape::Flat, 1e-4);
         assert!(curved_off <= 1, "{curved_off}");
     }
 
     #[test]
     fn straight_walk_matches_f64_in_f64() {
-        assert_eq!(straight_walk_matches_f64::<f64>(1e-10), 0);
+        assert_eq!(straight_walk_matches_f64::<f64>(Shape::Flat, 1e-10), 0);
+    }
+
+    #[test]
+    fn straight_beside_curved_matches_f64_in_f32() {
+        let curved_off = straight_walk_matches_f64::<f32>(Shape::Mixed, 1e-4);
+        assert!(curved_off <= 1, "{curved_off}");
+    }
+
+    #[test]
+    fn straight_beside_curved_matches_f64_in_f64() {
+        assert_eq!(straight_walk_matches_f64::<f64>(Shape::Mixed, 1e-10), 0);
     }
 
     /// Rays aimed at points exactly on the base edges between triangles (and on texel
-    /// corners there), from above and at a slant: every one hits, in f32 and f64.
-    fn base_edges_do_not_leak<T: Real>() {
-        let surface = tilted_surface::<T>(3);
+    /// corners there), from above and at a slant: every one hits, in f32 and f64, on one
+    /// patch (`Shape::Flat`) and where patches meet each other and curved triangles
+    /// (`Shape::Mixed`).
+    fn base_edges_do_not_leak<T: Real>(shape: Shape) {
+        let surface = tilted_surface::<T>(3, shape);
         let mesh = surface.mesh();
         let mut r = unit_randoms(5);
         let mut rays = 0;
@@ -264,80 +344,227 @@ mod tests {
 
     #[test]
     fn base_edges_do_not_leak_f32() {
-        base_edges_do_not_leak::<f32>();
+        base_edges_do_not_leak::<f32>(Shape::Flat);
+        base_edges_do_not_leak::<f32>(Shape::Mixed);
     }
 
     #[test]
     fn base_edges_do_not_leak_f64() {
-        base_edges_do_not_leak::<f64>();
+        base_edges_do_not_leak::<f64>(Shape::Flat);
+        base_edges_do_not_leak::<f64>(Shape::Mixed);
     }
 
-    /// Which triangles are walked straight: a flat grid all; a grid whose directions differ
-    /// in one vertex, one folded along an edge, or one with a uv seam inside: none (every
-    /// triangle of a patch that touches a curved or foreign neighbour keeps the curved walk);
-    /// a flat grid beside a curved one in the same mesh: the flat one only.
+    /// Rays aimed from every side at surface points on the open edges of `Shape::Mixed` (the
+    /// crease between its two patches and the line where the second meets the curved
+    /// triangles), where the two sides decide ownership on different lines or curves: the
+    /// walk hits wherever brute force does, no farther. Returns the rays aimed.
+    fn open_edges_do_not_leak<T: Real>() -> usize {
+        let surface = tilted_surface::<T>(5, Shape::Mixed);
+        let mesh = surface.mesh();
+        let mut r = unit_randoms(17);
+        let p = |v: T::Vec3| [v.x().to_f64(), v.y().to_f64(), v.z().to_f64()];
+        let v = |a: [f64; 3]| T::Vec3::new(T::from_f64(a[0]), T::from_f64(a[1]), T::from_f64(a[2]));
+        // Vertices `(i, j)` of the 4 x 4 grid: the open edges lie on the column lines i = 2
+        // (the crease) and i = 3 (beside the curved column).
+        let column = |vertex: u32| vertex as usize % 5;
+        let mut edges = Vec::new();
+        for tri in (0..mesh.triangle_count()).map(|i| mesh.triangle(i)) {
+            for k in 0..3 {
+                let (a, b) = (tri[k], tri[(k + 1) % 3]);
+                if a < b && column(a) == column(b) && (column(a) == 2 || column(a) == 3) {
+                    edges.push((a as usize, b as usize));
+                }
+            }
+        }
+        edges.sort_unstable();
+        edges.dedup();
+        assert_eq!(edges.len(), 8, "four edges on each line");
+        let (mut aimed, mut leaks) = (0, 0);
+        for (a, b) in edges {
+            let (pa, pb) = (p(mesh.positions()[a]), p(mesh.positions()[b]));
+            let n = p(mesh.normals()[a]);
+            for _ in 0..150 {
+                // The surface point above the edge point: brute force straight down the
+                // direction from above the shell.
+                let s = r();
+                let on_edge: [f64; 3] = core::array::from_fn(|c| pa[c] + s * (pb[c] - pa[c]));
+                let from: [f64; 3] = core::array::from_fn(|c| on_edge[c] + 2.0 * n[c]);
+                let down = Ray::new(v(from), v(n.map(|c| -c))).expect("a valid ray");
+                let Some(top) = surface.intersect_brute_force(&down, T::ZERO, T::INFINITY) else {
+                    continue;
+                };
+                let t = top.hit.t.to_f64();
+                let target: [f64; 3] = core::array::from_fn(|c| from[c] - t * n[c]);
+                for _ in 0..8 {
+                    // From the side the directions point to, at every slant.
+                    let d = loop {
+                        let d = [r() * 2.0 - 1.0, r() * 2.0 - 1.0, r() * 2.0 - 1.0];
+                        let l = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+                        let down = d[0] * n[0] + d[1] * n[1] + d[2] * n[2];
+                        if l > 0.1 && l <= 1.0 && down < -0.05 * l {
+                            break d.map(|c| c / l);
+                        }
+                    };
+                    let o: [f64; 3] = core::array::from_fn(|c| target[c] - 3.0 * d[c]);
+                    let ray = Ray::new(v(o), v(d)).expect("a valid ray");
+                    let Some(brute) = surface.intersect_brute_force(&ray, T::ZERO, T::INFINITY)
+                    else {
+                        continue;
+                    };
+                    aimed += 1;
+                    let hit = surface.intersect(
+                        &ray,
+                        T::ZERO,
+                        T::INFINITY,
+                        &mut TraversalStats::default(),
+                    );
+                    let through = hit.is_none_or(|h| {
+                        h.hit.t.to_f64() > brute.hit.t.to_f64() * (1.0 + 1e-3) + 1e-3
+                    });
+                    leaks += usize::from(through);
+                }
+            }
+        }
+        assert_eq!(leaks, 0, "of {aimed} rays");
+        aimed
+    }
+
     #[test]
-    fn affine_patches_are_whole_flat_parts_of_the_mesh() {
+    fn open_edges_do_not_leak_f32() {
+        assert!(open_edges_do_not_leak::<f32>() > 5000);
+    }
+
+    #[test]
+    fn open_edges_do_not_leak_f64() {
+        assert!(open_edges_do_not_leak::<f64>() > 5000);
+    }
+
+    /// Which triangles are walked straight and which of their edges are open: a flat grid
+    /// all, one patch, no open edge; a grid whose directions differ in one vertex: every
+    /// triangle but those touching it, the ring around it open; a grid folded along a
+    /// column line: all, two patches, open along the fold; a grid with a uv seam along a
+    /// column line: all but the triangles on the seam (their walls are the curved path's); a
+    /// flat grid beside a curved one in the same mesh: the flat one only.
+    #[test]
+    fn affine_patches_are_the_flat_parts_of_the_mesh() {
+        use super::AffinePatches;
+        use nlrt_poly::glam::{DVec2, DVec3};
+        const K: usize = 4;
         let flat = grid::<f64>(
-            2,
+            K,
             [[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
             [0.0, 0.0, 1.0],
             [0.0, 1.0],
             [0.0; 2],
         );
-        let field = || random_field(8, 1);
-        let build = |m: BaseMesh<f64>| DisplacedSurface::new(m, field(), 0.2, 1.0).expect("valid");
-        assert_eq!(build(flat.clone()).straight_triangles(), 8);
+        let triangles = || {
+            (0..flat.triangle_count())
+                .map(|i| flat.triangle(i))
+                .collect::<Vec<_>>()
+        };
+        let remesh = |positions: Vec<DVec3>, normals: Vec<DVec3>, uvs: Vec<DVec2>, tris| {
+            BaseMesh::new(positions, normals, uvs, tris).expect("valid")
+        };
+        // (straight triangles, straight triangles with an open edge).
+        let patches = |m: &BaseMesh<f64>| {
+            let p = AffinePatches::find(m, 0.2, [1.0, 1.0], 8);
+            let open = p
+                .triangles()
+                .iter()
+                .flatten()
+                .filter(|t| t.has_open_edge())
+                .count();
+            (p.straight_triangles(), open)
+        };
+        let all = flat.triangle_count();
+        assert_eq!(patches(&flat), (all, 0));
 
+        let centre = (K / 2 * (K + 1) + K / 2) as u32;
         let mut normals = flat.normals().to_vec();
-        normals[4] = nlrt_poly::glam::DVec3::new(0.0, 0.1, 1.0);
-        let bent = BaseMesh::new(
+        normals[centre as usize] = DVec3::new(0.0, 0.1, 1.0);
+        let bent = remesh(
             flat.positions().to_vec(),
             normals,
             flat.uvs().to_vec(),
-            (0..flat.triangle_count())
-                .map(|i| flat.triangle(i))
-                .collect::<Vec<_>>(),
-        )
-        .expect("valid");
-        assert_eq!(build(bent).straight_triangles(), 0);
+            triangles(),
+        );
+        let touching = triangles().iter().filter(|t| t.contains(&centre)).count();
+        let (straight, open) = patches(&bent);
+        assert_eq!(straight, all - touching);
+        assert!(open > 0 && open < straight, "{open} of {straight}");
 
         let mut positions = flat.positions().to_vec();
-        for p in positions.iter_mut().filter(|p| p.x > 0.75) {
-            p.z += 0.3 * (p.x - 0.5);
+        for p in positions.iter_mut().filter(|p| p.x > 0.5) {
+            p.z += 0.5 * (p.x - 0.5);
         }
-        let folded = BaseMesh::new(
+        let folded = remesh(
             positions,
             flat.normals().to_vec(),
             flat.uvs().to_vec(),
-            (0..flat.triangle_count())
-                .map(|i| flat.triangle(i))
-                .collect::<Vec<_>>(),
-        )
-        .expect("valid");
-        assert_eq!(build(folded).straight_triangles(), 0);
+            triangles(),
+        );
+        // The fold's two sides each have one column of triangles along it (2 K in all).
+        assert_eq!(patches(&folded), (all, 2 * K));
+
+        // A uv seam along the middle column line: its vertices duplicated, the right side's
+        // uvs shifted by half a unit.
+        let (mut positions, mut normals, mut uvs) = (
+            flat.positions().to_vec(),
+            flat.normals().to_vec(),
+            flat.uvs().to_vec(),
+        );
+        let mut copy = alloc::vec![u32::MAX; positions.len()];
+        for v in 0..positions.len() {
+            if positions[v].x == 0.5 {
+                copy[v] = positions.len() as u32;
+                positions.push(positions[v]);
+                normals.push(normals[v]);
+                uvs.push(uvs[v] + DVec2::new(0.5, 0.0));
+            }
+        }
+        let mut shifted = uvs.clone();
+        for (v, uv) in shifted.iter_mut().enumerate() {
+            if positions[v].x > 0.5 {
+                *uv += DVec2::new(0.5, 0.0);
+            }
+        }
+        let seamed_triangles = triangles()
+            .into_iter()
+            .map(|t| {
+                let right = t.iter().any(|&v| flat.positions()[v as usize].x > 0.5);
+                t.map(|v| {
+                    if right && copy[v as usize] != u32::MAX {
+                        copy[v as usize]
+                    } else {
+                        v
+                    }
+                })
+            })
+            .collect();
+        let seamed = remesh(positions, normals, shifted, seamed_triangles);
+        // One triangle of each quad beside the seam has an edge on it: 2 K of them.
+        let (straight, _) = patches(&seamed);
+        assert_eq!(straight, all - 2 * K);
 
         // Two copies side by side, the second with its own vertices and bent directions.
         let mut positions = flat.positions().to_vec();
         let mut normals = flat.normals().to_vec();
         let mut uvs = flat.uvs().to_vec();
-        let mut triangles = (0..flat.triangle_count())
-            .map(|i| flat.triangle(i))
-            .collect::<Vec<_>>();
+        let mut both_triangles = triangles();
         let base = positions.len() as u32;
         positions.extend(
             flat.positions()
                 .iter()
-                .map(|p| *p + nlrt_poly::glam::DVec3::new(3.0, 0.0, 0.0)),
+                .map(|p| *p + DVec3::new(3.0, 0.0, 0.0)),
         );
         normals.extend(
             flat.positions()
                 .iter()
-                .map(|p| nlrt_poly::glam::DVec3::new(p.x * 0.2, 0.0, 1.0)),
+                .map(|p| DVec3::new(p.x * 0.2, 0.0, 1.0)),
         );
         uvs.extend(flat.uvs().iter().copied());
-        triangles.extend((0..flat.triangle_count()).map(|i| flat.triangle(i).map(|v| v + base)));
-        let both = BaseMesh::new(positions, normals, uvs, triangles).expect("valid");
-        assert_eq!(build(both).straight_triangles(), 8);
+        both_triangles.extend(triangles().iter().map(|t| t.map(|v| v + base)));
+        let both = remesh(positions, normals, uvs, both_triangles);
+        assert_eq!(patches(&both), (all, 0));
     }
 }

@@ -396,8 +396,8 @@ impl<T: Real> DisplacedSurface<T> {
         Ok(update)
     }
 
-    /// Whether prisms whose three displacement directions are equal (in patches that are whole
-    /// connected parts of the mesh) are walked along the ray's straight line in texel space
+    /// Whether prisms whose three displacement directions are equal (grouped into patches of
+    /// neighbours that share one affine map) are walked along the ray's straight line in texel space
     /// (the default), or every prism along its curve (for comparison: the same surface, hits
     /// within rounding).
     pub fn set_straight_walk(&mut self, on: bool) {
@@ -405,7 +405,7 @@ impl<T: Real> DisplacedSurface<T> {
     }
 
     /// The base triangles walked along straight lines when [`DisplacedSurface::set_straight_walk`]
-    /// is on: the affine prisms of patches that are whole connected parts of the mesh.
+    /// is on: the affine prisms, but those with a uv seam or a non-manifold edge.
     #[must_use]
     pub fn straight_triangles(&self) -> usize {
         self.straight.straight_triangles()

@@ -156,8 +156,11 @@ impl TexelFrame {
 pub(crate) struct TexelTriangle<T> {
     pub(super) corners: [[T; 2]; 3],
     /// Per edge `k` (corners `k`, `k + 1`): its corners in canonical order (the smaller
-    /// `(x, y)` first) and whether the triangle lies where the edge function is positive.
-    edges: [([T; 2], [T; 2], bool); 3],
+    /// `(x, y)` first), whether the triangle lies where the edge function is positive, and
+    /// the edge's length where it is open (shared with a triangle outside the patch, which
+    /// sees another line or a curve: hits up to the walk's window beyond it are owned), 0
+    /// where it is closed (shared inside the patch, decided exactly, or the mesh's border).
+    edges: [([T; 2], [T; 2], bool, T); 3],
     /// Rows of the map from `(x, y) - corners[0]` to `(alpha, beta)`.
     to_canonical: [[f64; 2]; 2],
 }
@@ -172,7 +175,9 @@ fn edge_function<T: Real>(a: [T; 2], b: [T; 2], q: [T; 2]) -> T {
 }
 
 impl<T: Real> TexelTriangle<T> {
-    fn new(prism: &Prism<T>, side: T) -> Self {
+    /// The triangle of `prism` on a map of `side` texels per unit, with its edges `k`
+    /// (corners `k`, `k + 1`) open where `open[k]`.
+    fn new(prism: &Prism<T>, side: T, open: [bool; 3]) -> Self {
         let corners = prism.uv.map(|uv| [uv.x() * side, uv.y() * side]);
         let wide = corners.map(|c| [c[0].to_f64(), c[1].to_f64()]);
         let edges = core::array::from_fn(|k| {
@@ -188,7 +193,12 @@ impl<T: Real> TexelTriangle<T> {
             );
             let c = wide[(k + 2) % 3];
             let side = (bw[0] - aw[0]) * (c[1] - aw[1]) - (bw[1] - aw[1]) * (c[0] - aw[0]);
-            (a, b, side > 0.0)
+            let length = if open[k] {
+                T::from_f64((bw[0] - aw[0]).hypot(bw[1] - aw[1]))
+            } else {
+                T::ZERO
+            };
+            (a, b, side > 0.0, length)
         });
         let (e1, e2) = (
             [wide[1][0] - wide[0][0], wide[1][1] - wide[0][1]],
@@ -203,13 +213,23 @@ impl<T: Real> TexelTriangle<T> {
         }
     }
 
-    /// Whether the texel point `q` lies in the triangle or on its edges.
+    /// Whether the texel point `q` lies in the triangle or on its edges, or beyond an open
+    /// edge by at most `window` texels (a finite bound on the error of `q`).
     #[inline]
-    pub(super) fn owns(&self, q: [T; 2]) -> bool {
-        self.edges.iter().all(|&(a, b, positive)| {
+    pub(super) fn owns(&self, q: [T; 2], window: T) -> bool {
+        self.edges.iter().all(|&(a, b, positive, length)| {
+            // The edge function is the distance from the edge times its length; a closed
+            // edge's length is 0, so its bound is 0 (the exact decision).
             let e = edge_function(a, b, q);
-            if positive { e >= T::ZERO } else { e <= T::ZERO }
+            let slack = window * length;
+            if positive { e >= -slack } else { e <= slack }
         })
+    }
+
+    /// Whether any edge is open.
+    #[cfg(test)]
+    pub(super) fn has_open_edge(&self) -> bool {
+        self.edges.iter().any(|e| e.3 > T::ZERO)
     }
 
     /// `(alpha, beta)` of the texel point `q`, moved onto the triangle: computed in `f64`
@@ -244,8 +264,15 @@ pub(crate) struct AffinePatches<T> {
 }
 
 /// A base edge as patches are found: its two positions' bits (the smaller first), its
-/// triangle, the uvs' bits at those positions.
-type EdgeKey = ([[u64; 3]; 2], u32, [[u64; 2]; 2]);
+/// triangle, the uvs' bits at those positions, its index in the triangle (corners `k`,
+/// `k + 1`).
+type EdgeKey = ([[u64; 3]; 2], u32, [[u64; 2]; 2], u8);
+
+/// Whether a group of edges with the same two positions is one edge shared by two triangles
+/// with the same uvs at its ends (a manifold edge inside one uv chart).
+fn is_clean_pair(group: &[EdgeKey]) -> bool {
+    group.len() == 2 && group[0].1 != group[1].1 && group[0].2 == group[1].2
+}
 
 /// Union-find root with path halving.
 fn find(parent: &mut [u32], mut i: u32) -> u32 {
@@ -285,43 +312,52 @@ impl<T: Real> AffinePatches<T> {
                 };
                 let (ka, kb) = (key(prism.p[a]), key(prism.p[b]));
                 let entry = if ka <= kb {
-                    ([ka, kb], i as u32, [uv(a), uv(b)])
+                    ([ka, kb], i as u32, [uv(a), uv(b)], k as u8)
                 } else {
-                    ([kb, ka], i as u32, [uv(b), uv(a)])
+                    ([kb, ka], i as u32, [uv(b), uv(a)], k as u8)
                 };
                 edges.push(entry);
             }
         }
         edges.sort_unstable_by(|x, y| x.0.cmp(&y.0).then(x.1.cmp(&y.1)));
-        let mut parent: Vec<u32> = (0..count as u32).collect();
-        let mut blocked = vec![false; count];
-        for i in 0..count {
-            blocked[i] = frames[i].is_none();
-        }
+        let mut groups: Vec<(usize, usize)> = Vec::new();
         let mut start = 0;
         while start < edges.len() {
             let mut end = start + 1;
             while end < edges.len() && edges[end].0 == edges[start].0 {
                 end += 1;
             }
+            groups.push((start, end));
+            start = end;
+        }
+        // A triangle with an edge shared by more than two triangles or across a uv seam keeps
+        // the curved path (its seam walls are the curved path's); so does one without a frame.
+        let mut blocked: Vec<bool> = frames.iter().map(Option::is_none).collect();
+        for &(start, end) in &groups {
             let group = &edges[start..end];
-            if group.len() > 1 {
-                let joined = group.len() == 2 && group[0].1 != group[1].1 && {
-                    let (i, j) = (group[0].1 as usize, group[1].1 as usize);
-                    group[0].2 == group[1].2
-                        && frames[i].is_some_and(|f| f.holds(&prisms[j], side_f))
-                        && frames[j].is_some_and(|f| f.holds(&prisms[i], side_f))
-                };
-                if joined {
-                    let (a, b) = (find(&mut parent, group[0].1), find(&mut parent, group[1].1));
-                    parent[a.max(b) as usize] = a.min(b);
-                } else {
-                    for e in group {
-                        blocked[e.1 as usize] = true;
-                    }
+            if group.len() > 1 && !is_clean_pair(group) {
+                for e in group {
+                    blocked[e.1 as usize] = true;
                 }
             }
-            start = end;
+        }
+        // Neighbours whose maps agree are joined into one patch; neighbours whose maps differ
+        // (a crease, a bent direction) stay apart, each side's edge open.
+        let mut parent: Vec<u32> = (0..count as u32).collect();
+        for &(start, end) in &groups {
+            let group = &edges[start..end];
+            if !is_clean_pair(group) {
+                continue;
+            }
+            let (i, j) = (group[0].1 as usize, group[1].1 as usize);
+            let joined = !blocked[i]
+                && !blocked[j]
+                && frames[i].is_some_and(|f| f.holds(&prisms[j], side_f))
+                && frames[j].is_some_and(|f| f.holds(&prisms[i], side_f));
+            if joined {
+                let (a, b) = (find(&mut parent, group[0].1), find(&mut parent, group[1].1));
+                parent[a.max(b) as usize] = a.min(b);
+            }
         }
         // Each patch's frame is fitted on three of its vertices that span it (the root's first
         // corner, the vertex farthest from it in texel space, the vertex farthest from the line
@@ -402,7 +438,25 @@ impl<T: Real> AffinePatches<T> {
                 let [x, y] = texel(i, k);
                 *b = [b[0].min(x), b[1].min(y), b[2].max(x), b[3].max(y)];
             }
-            triangles[i] = Some(TexelTriangle::new(&prisms[i], side_t));
+        }
+        // An edge is open where the triangle across it is in another patch or curved; closed
+        // inside a patch and on the mesh's border.
+        let mut open = vec![[false; 3]; count];
+        for &(start, end) in &groups {
+            let group = &edges[start..end];
+            if !is_clean_pair(group) {
+                continue;
+            }
+            let (i, j) = (group[0].1 as usize, group[1].1 as usize);
+            if patch_of[i] != patch_of[j] {
+                open[i][usize::from(group[0].3)] = true;
+                open[j][usize::from(group[1].3)] = true;
+            }
+        }
+        for i in 0..count {
+            if patch_of[i] != CURVED {
+                triangles[i] = Some(TexelTriangle::new(&prisms[i], side_t, open[i]));
+            }
         }
         Self {
             patch_of,
@@ -410,6 +464,12 @@ impl<T: Real> AffinePatches<T> {
             boxes,
             triangles,
         }
+    }
+
+    /// Per triangle, its texel triangle where it is walked straight.
+    #[cfg(test)]
+    pub(super) fn triangles(&self) -> &[Option<TexelTriangle<T>>] {
+        &self.triangles
     }
 
     /// Triangles walked straight.

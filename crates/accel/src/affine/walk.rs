@@ -43,6 +43,10 @@ struct Walk<'a, T: Real> {
     axes: [usize; 3],
     shear: [T; 3],
     pad_xy: T,
+    /// How far beyond an open base edge (one shared with a triangle walked on another line
+    /// or on its curve) a hit point is still owned, in texels: a bound on the hit point's
+    /// error, so that a hit on this side is never disowned by rounding alone.
+    window: T,
     /// The line's height at `t` in sample units (`65535` per unit height): `origin + t dir`,
     /// so that node bounds are compared as stored, without a division.
     sample_origin: T,
@@ -151,7 +155,7 @@ impl<T: Real> Walk<'_, T> {
             let point =
                 |a: usize| bary[0].mul_add(p[i][a], bary[1].mul_add(p[j][a], bary[2] * p[k][a]));
             let q = [point(0), point(1)];
-            if !self.triangle.owns(q) {
+            if !self.triangle.owns(q, self.window) {
                 continue;
             }
             let (alpha, beta) = self.triangle.canonical(q);
@@ -371,12 +375,22 @@ pub(crate) fn walk_straight<T: Real>(
     // (two roundings on magnitudes up to the reach).
     let samples = T::from_i32(i32::from(HEIGHT_ONE));
     let pad_samples = samples * (pad_h + T::TWO * eps * (reach(2) + T::ONE));
+    // The hit point's error in `x, y`: the line's (`pad_xy`) and the test's barycentric
+    // combination of the corners (the same roundings on the same magnitudes, `pad_xy` again),
+    // plus the shift along the line that its height error makes where it meets a surface
+    // that is nearly level in texel space (heights span `[0, 1]` over thousands of texels):
+    // `pad_h` times the line's run per unit of rise. Capped at one texel, the clip's
+    // padding across an edge: no hit farther beyond it is ever reported, and a hit whose
+    // point is uncertain by a texel is a grazing one, whose side no rounding decides.
+    let run = line.dir[0].abs().max(line.dir[1].abs());
+    let window = (T::TWO * pad_xy + pad_h * run / line.dir[2].abs()).min(T::ONE);
     let walk = Walk {
         line,
         triangle,
         axes: [kx, ky, kz],
         shear,
         pad_xy,
+        window,
         sample_origin: line.origin[2] * samples,
         sample_dir: line.dir[2] * samples,
         pad_samples,

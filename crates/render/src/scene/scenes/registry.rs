@@ -76,7 +76,7 @@ fn coarse(k: usize, size: Size) -> Option<Scene> {
 use Tag::{Coarse, Ghost, Report, ReportJudged, Seam, Shell, Variant, Watertight};
 
 /// Every built-in scene, the report's first (in the order it renders them), then the variants.
-pub const BUILTIN: [Builtin; 29] = [
+pub const BUILTIN: [Builtin; 30] = [
     Builtin {
         name: "mountain",
         tags: &[Report, ReportJudged, Watertight],
@@ -221,6 +221,11 @@ pub const BUILTIN: [Builtin; 29] = [
         name: "torus-twisted",
         tags: &[Variant, Ghost, Watertight],
         build: |s| ghost_torus("torus-twisted", s.pick(256, 64)),
+    },
+    Builtin {
+        name: "plateau",
+        tags: &[Variant, ReportJudged, Watertight],
+        build: |s| Some(plateau(s.pick(1024, 256))),
     },
     Builtin {
         name: "seam-cube",

@@ -251,6 +251,99 @@ pub fn fig9_displaced(side: usize) -> Scene {
     scene
 }
 
+/// A plateau meeting curved flanks, for the watertightness of straight and curved walks side
+/// by side: a 32 x 32 quad grid over `[-1, 1]^2`, flat (`y = 0`, directions straight up) where
+/// `|x|, |z| <= 1/2` and bending down beyond as `y = -(max(|x| - 1/2, 0)^2 + max(|z| - 1/2,
+/// 0)^2)`, each vertex displaced along the surface's normal there. The plateau's 512 triangles
+/// share one affine map and are walked along straight lines; the ring of triangles beyond its
+/// rim (one vertex still straight up, the other tilted) and the flanks take the curved walk;
+/// the two meet along the rim, where the fBm map is far from zero. The map is clamped and
+/// fades to exactly zero on its border (as in [`fig9_displaced`]), so every ray that reaches
+/// the base is judged. Positions on the grid are exact binary fractions.
+#[must_use]
+pub fn plateau(side: usize) -> Scene {
+    const QUADS: usize = 32;
+    let bend = |c: f64| (c.abs() - 0.5).max(0.0);
+    let at = |u: f64, v: f64| {
+        let (x, z) = (2.0 * u - 1.0, 2.0 * v - 1.0);
+        let (bx, bz) = (bend(x), bend(z));
+        let y = if bx == 0.0 && bz == 0.0 {
+            0.0
+        } else {
+            -(bx * bx + bz * bz)
+        };
+        // The normal of `y = f(x, z)`: `(-df/dx, 1, -df/dz)`, straight up on the plateau and
+        // its rim (where the derivatives are 0).
+        let normal = if bx == 0.0 && bz == 0.0 {
+            DVec3::Y
+        } else {
+            DVec3::new(2.0 * bx * x.signum(), 1.0, 2.0 * bz * z.signum()).normalize()
+        };
+        (DVec3::new(x, y, z), normal)
+    };
+    let (mut positions, mut normals, mut uvs, mut triangles) =
+        (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    for j in 0..=QUADS {
+        for i in 0..=QUADS {
+            let uv = DVec2::new(i as f64, j as f64) / QUADS as f64;
+            let (p, n) = at(uv.x, uv.y);
+            positions.push(p);
+            normals.push(n);
+            uvs.push(uv);
+        }
+    }
+    let idx = |i: usize, j: usize| (j * (QUADS + 1) + i) as u32;
+    for j in 0..QUADS {
+        for i in 0..QUADS {
+            // Wound as the mountain's quad: counter-clockwise seen from above.
+            triangles.push([idx(i, j), idx(i + 1, j + 1), idx(i + 1, j)]);
+            triangles.push([idx(i, j), idx(i, j + 1), idx(i + 1, j + 1)]);
+        }
+    }
+    let noise = fbm_map(side, 4, 6, 29);
+    let last = (side - 1) as f64;
+    let heights: Vec<f32> = noise
+        .iter()
+        .enumerate()
+        .map(|(k, &h)| {
+            let (i, j) = ((k % side) as f64, (k / side) as f64);
+            let window =
+                (std::f64::consts::PI * i / last).sin() * (std::f64::consts::PI * j / last).sin();
+            let on_border = i == 0.0 || j == 0.0 || i == last || j == last;
+            if on_border {
+                0.0
+            } else {
+                (f64::from(h) * window.sqrt()).max(0.0) as f32
+            }
+        })
+        .collect();
+    Scene {
+        name: "plateau",
+        positions,
+        normals,
+        uvs,
+        triangles,
+        content: Content::Displacement(
+            HeightField::from_unit_heights(side, side, &heights, Wrap::Clamp)
+                .expect("power-of-two side"),
+        ),
+        height_scale: 0.15,
+        tiling: 1.0,
+        // Over a corner of the plateau, looking along its rim and down a flank.
+        camera: Camera {
+            eye: DVec3::new(1.3, 1.1, 1.5),
+            target: DVec3::new(0.25, -0.1, 0.3),
+            fov_degrees: 50.0,
+        },
+        sun: DVec3::new(0.5, 0.8, 0.3).normalize(),
+        material: Material::Diffuse,
+        motion: Motion::deform(Deformation::Wave),
+        seam_rule: SeamRule::Closed,
+        others: Vec::new(),
+        midlevel: 0.0,
+    }
+}
+
 /// A cube as a user's asset has it: 6 faces of 4 x 4 quads, each face its own island of a
 /// 3 x 2 uv atlas (with margins), and normals split at the cube's edges (each face keeps its
 /// own). Every edge of the cube is a uv seam and a normal seam; a clamped fBm map makes the
