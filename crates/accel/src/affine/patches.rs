@@ -194,7 +194,10 @@ impl<T: Real> TexelTriangle<T> {
             let c = wide[(k + 2) % 3];
             let side = (bw[0] - aw[0]) * (c[1] - aw[1]) - (bw[1] - aw[1]) * (c[0] - aw[0]);
             let length = if open[k] {
-                T::from_f64((bw[0] - aw[0]).hypot(bw[1] - aw[1]))
+                {
+                    let (dx, dy) = (bw[0] - aw[0], bw[1] - aw[1]);
+                    T::from_f64((dx * dx + dy * dy).sqrt())
+                }
             } else {
                 T::ZERO
             };
