@@ -224,8 +224,9 @@ pub struct ReportCommand {
 /// The arguments of `nlrt watertight`.
 #[derive(clap::Args)]
 pub struct WatertightCommand {
-    /// Displacement scene: torus, fur, mountain, mountain-grazing, fig9-displaced, the
-    /// ghost-hit tori torus-spikes, torus-tilted, torus-twisted, the uv-seam scenes
+    /// Displacement scene: torus, fur, mountain, mountain-grazing, fig9-displaced, plateau,
+    /// plateau-grazing, the ghost-hit tori torus-spikes, torus-tilted, torus-twisted, the
+    /// uv-seam scenes
     /// seam-cube, seam-sphere (or cylinder, whose open ends make only part of its rays
     /// decidable); shell scene: scales, feathers, cornell, highpoly, fig9 (nonlinear
     /// tracing only); or a scene file (`*.toml`).

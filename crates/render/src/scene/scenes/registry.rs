@@ -60,6 +60,16 @@ fn mountain_grazing(size: Size) -> Scene {
     m
 }
 
+/// The plateau seen at grazing angles: just above its top, looking across the plateau and
+/// over its rim, down the far flank, about 8 degrees down.
+fn plateau_grazing(size: Size) -> Scene {
+    let mut p = plateau(size.pick(1024, 256));
+    p.name = "plateau-grazing";
+    p.camera.eye = DVec3::new(-0.3, 0.2, -0.2);
+    p.camera.target = DVec3::new(1.0, 0.0, 0.9);
+    p
+}
+
 /// `scene` with midlevel 0.5 (its map pushes in and out), renamed.
 fn at_half_midlevel(mut scene: Scene, name: &'static str) -> Scene {
     scene.name = name;
@@ -76,7 +86,7 @@ fn coarse(k: usize, size: Size) -> Option<Scene> {
 use Tag::{Coarse, Ghost, Report, ReportJudged, Seam, Shell, Variant, Watertight};
 
 /// Every built-in scene, the report's first (in the order it renders them), then the variants.
-pub const BUILTIN: [Builtin; 30] = [
+pub const BUILTIN: [Builtin; 31] = [
     Builtin {
         name: "mountain",
         tags: &[Report, ReportJudged, Watertight],
@@ -226,6 +236,11 @@ pub const BUILTIN: [Builtin; 30] = [
         name: "plateau",
         tags: &[Variant, ReportJudged, Watertight],
         build: |s| Some(plateau(s.pick(1024, 256))),
+    },
+    Builtin {
+        name: "plateau-grazing",
+        tags: &[Variant, Watertight],
+        build: |s| Some(plateau_grazing(s)),
     },
     Builtin {
         name: "seam-cube",
