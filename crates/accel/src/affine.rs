@@ -34,7 +34,7 @@ mod patches;
 mod walk;
 
 pub(crate) use patches::AffinePatches;
-pub(crate) use walk::walk_straight;
+pub(crate) use walk::{Walk, walk_straight, walk_straight_tiles};
 
 #[cfg(test)]
 mod tests {

@@ -727,7 +727,10 @@ impl<T: Real> DisplacedSurface<T> {
                 });
             }
             let nl = NonlinearRay::with_perpendiculars(prism, ray, frame);
-            // See `PrismTlas::intersect`: finite for a ray that entered the prism's box.
+            // Eq. 6 sees the origin only through its offset across the ray, which is below the
+            // prism box's size for a ray that entered the box, and the box lies within
+            // `max_world_coordinate` (checked at construction): finite. A NaN curve would have
+            // the walk visit every node (every comparison with NaN fails).
             debug_assert!(nl.is_finite(), "{nl:?} in {prism:?}");
             let hit = self.intersect_blas(tri, prism, &nl, t_min, t_max, stats);
             self.nearer_wall_hit(tri, prism, &nl, t_min, t_max, hit)

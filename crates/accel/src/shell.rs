@@ -6,12 +6,13 @@
 
 use alloc::vec::Vec;
 use core::fmt;
-use nlrt_poly::{Real, Vector3};
+use nlrt_poly::{Real, Vector2, Vector3};
 use nlrt_shellmap::{
     BaseEdges, Hit, NonlinearRay, Prism, Ray, TextureCurve, TexturePlane, WideRay, facing_unit,
     world_normal,
 };
 
+use crate::affine::{AffinePatches, Walk, walk_straight_tiles};
 use crate::bvh::{Aabb, Bvh4};
 use crate::cells::{CURVE_STACK, CellSize, walk_cells};
 use crate::mesh::{BaseMesh, MeshError};
@@ -193,6 +194,11 @@ pub struct ShellHit<T: Real> {
 pub struct ShellSurface<T: Real> {
     pub(crate) prisms: PrismTlas<T>,
     object: ShellObject<T>,
+    /// The mesh's affine patches (tiles as texels), walked along straight lines
+    /// (`crate::affine`).
+    straight: AffinePatches<T>,
+    /// Whether affine patches are walked straight (else every prism takes the curved path).
+    straight_walk: bool,
 }
 
 /// Inline entries of the object-BVH stack: a 4-ary walk holds at most 3 per level, so this
@@ -219,7 +225,28 @@ impl<T: Real> ShellSurface<T> {
                 ShellError::TileRangeTooLarge { triangle, range }
             }
         })?;
-        Ok(Self { prisms, object })
+        let straight = AffinePatches::find(&prisms.mesh, height_scale, [tiling; 2], 1);
+        Ok(Self {
+            prisms,
+            object,
+            straight,
+            straight_walk: true,
+        })
+    }
+
+    /// Whether prisms whose three displacement directions are equal (grouped into patches of
+    /// neighbours that share one affine map) are walked along the ray's straight line in
+    /// texture space, the object's boxes and triangles tested on that line (the default), or
+    /// every prism along its curve (for comparison: the same surface, hits within rounding).
+    pub fn set_straight_walk(&mut self, on: bool) {
+        self.straight_walk = on;
+    }
+
+    /// The base triangles walked along straight lines when [`ShellSurface::set_straight_walk`]
+    /// is on: the affine prisms, but those with a uv seam or a non-manifold edge.
+    #[must_use]
+    pub fn straight_triangles(&self) -> usize {
+        self.straight.straight_triangles()
     }
 
     /// The object.
@@ -261,7 +288,15 @@ impl<T: Real> ShellSurface<T> {
         normals: &[T::Vec3],
         update: TlasUpdate,
     ) -> Result<PoseUpdate, MeshError> {
-        self.prisms.set_pose(positions, normals, update)
+        let update = self.prisms.set_pose(positions, normals, update)?;
+        // A pose may make prisms affine or curved: the patches follow it.
+        self.straight = AffinePatches::find(
+            &self.prisms.mesh,
+            self.prisms.height_scale,
+            self.prisms.uv_scale,
+            1,
+        );
+        Ok(update)
     }
 
     /// The TLAS.
@@ -288,7 +323,7 @@ impl<T: Real> ShellSurface<T> {
     /// costs nothing.
     #[must_use]
     pub fn memory_bytes(&self) -> usize {
-        self.object.memory_bytes() + self.prisms.memory_bytes()
+        self.object.memory_bytes() + self.prisms.memory_bytes() + self.straight.memory_bytes()
     }
 
     #[inline]
@@ -445,6 +480,131 @@ impl<T: Real> ShellSurface<T> {
         }
     }
 
+    /// The nearest hit of `ray` in base triangle `tri` with `t` in `[t_min, t_max]` along its
+    /// straight line in texture space, where the triangle is in an affine patch (`None`
+    /// otherwise; `Some(None)` for no hit): the tiles the line's padded slab meets, nearest
+    /// first, and in each the object's BVH by slab tests and its triangles by the watertight
+    /// test, in `T` (no windows to bound: the test is exact about which side of a shared
+    /// edge a line passes).
+    fn intersect_straight(
+        &self,
+        tri: usize,
+        prism: &Prism<T>,
+        ray: &Ray<T>,
+        [t_min, t_max]: [T; 2],
+        stats: &mut TraversalStats,
+    ) -> Option<Option<ShellHit<T>>> {
+        if !self.straight_walk {
+            return None;
+        }
+        let (line, triangle) = self.straight.line(tri, ray, t_min)?;
+        let Some(walk) = line.and_then(|line| Walk::new(line, triangle, t_min, t_max)) else {
+            return Some(None);
+        };
+        let heights = self.object.h_range;
+        let found = walk_straight_tiles(
+            &walk,
+            self.prisms.roots(tri),
+            heights,
+            stats,
+            |x, y, t_best, stats| self.straight_tile(&walk, [x, y], t_best, stats),
+        );
+        let (tau, (q, object_triangle, tile)) = found?;
+        let t = walk.world_t(tau);
+        if !(t <= t_max) {
+            // The clip's upper end is `t_max - t0` rounded: the nearest hit may lie a rounding
+            // beyond `t_max`.
+            return Some(None);
+        }
+        let (alpha, beta) = triangle.canonical([q[0], q[1]]);
+        let uv = prism.texture_uv(alpha, beta);
+        Some(Some(ShellHit {
+            hit: Hit {
+                t,
+                alpha,
+                beta,
+                h: q[2].max(T::ZERO).min(T::ONE),
+                u: uv.x(),
+                v: uv.y(),
+            },
+            triangle: tri as u32,
+            tile,
+            object_triangle,
+        }))
+    }
+
+    /// The nearest hit in tile `tile` along `walk`'s line below line parameter `t_best`: the
+    /// object's BVH nearest first, its boxes placed in the tile as its triangles are (the
+    /// offset added in `T`, so that each box holds its placed triangles) and padded by the
+    /// walk's rounding bounds; the line parameter, point, object triangle and tile.
+    #[allow(clippy::type_complexity)]
+    fn straight_tile(
+        &self,
+        walk: &Walk<'_, T>,
+        [x, y]: [i32; 2],
+        t_best: T,
+        stats: &mut TraversalStats,
+    ) -> Option<(T, ([T; 3], u32, [i32; 2]))> {
+        let nodes = self.object.bvh.nodes();
+        let order = self.object.bvh.primitive_order();
+        if nodes.is_empty() {
+            return None;
+        }
+        let (t_lo, _) = walk.interval();
+        let (dx, dy) = (T::from_i32(x), T::from_i32(y));
+        let mut t_best = t_best;
+        let mut best = None;
+        let mut stack = SpillStack::<_, OBJECT_STACK>::new((0u32, T::ZERO));
+        stack.push((0, t_lo));
+        while let Some((node, entry)) = stack.pop() {
+            if entry > t_best {
+                continue;
+            }
+            let node = &nodes[node as usize];
+            let mut found: [(T, usize); 4] = [(T::ZERO, 0); 4];
+            let mut n = 0;
+            for c in 0..4 {
+                if !Bvh4::is_used(node, c) {
+                    continue;
+                }
+                let b = &node.bounds[c];
+                stats.box_tests += 1;
+                let lo = [b.lo[0] + dx, b.lo[1] + dy, b.lo[2]];
+                let hi = [b.hi[0] + dx, b.hi[1] + dy, b.hi[2]];
+                let (t_in, t_out) = walk.box_interval(lo, hi, t_lo, t_best);
+                if t_in <= t_out {
+                    let mut i = n;
+                    while i > 0 && found[i - 1].0 > t_in {
+                        found[i] = found[i - 1];
+                        i -= 1;
+                    }
+                    found[i] = (t_in, c);
+                    n += 1;
+                }
+            }
+            for &(t, c) in &found[..n] {
+                if node.count[c] > 0 && t <= t_best {
+                    let first = node.index[c] as usize;
+                    for &k in &order[first..first + node.count[c] as usize] {
+                        stats.texel_tests += 1;
+                        let placed = Self::shifted(&self.object.triangles[k as usize], x, y)
+                            .map(|p| [p.x(), p.y(), p.z()]);
+                        if let Some((tau, q)) = walk.triangle_hit(placed, t_best) {
+                            t_best = tau;
+                            best = Some((tau, (q, k, [x, y])));
+                        }
+                    }
+                }
+            }
+            for &(t, c) in found[..n].iter().rev() {
+                if node.count[c] == 0 {
+                    stack.push((node.index[c], t));
+                }
+            }
+        }
+        best
+    }
+
     /// The nearest hit in base triangle `tri` through the implicit quadtree over tiles.
     ///
     /// A surface in a type narrower than `f64` traces every prism in `f64` from its own data
@@ -539,6 +699,12 @@ impl<T: Real> ShellSurface<T> {
                         return None;
                     }
                     stats.prism_tests += 1;
+                    if let Some(found) =
+                        self.intersect_straight(tri, prism, ray, [t_min, t_max], stats)
+                    {
+                        let hit = found?;
+                        return Some((hit, query.range_after(hit.hit.t)));
+                    }
                     stats.f64_prisms += 1;
                     let (prism, nl) = wide.in_prism(prism);
                     let (search, t_max) = (Search::Walk, t_max.to_f64());
@@ -547,12 +713,26 @@ impl<T: Real> ShellSurface<T> {
                     Some((hit, query.range_after(hit.hit.t)))
                 });
         }
+        // Eq. 6's frame depends on the ray alone: set up once for all its prisms.
+        let frame = ray.perpendiculars();
         self.prisms
-            .intersect(ray, t_min, t_max, stats, |tri, prism, nl, t_max, stats| {
+            .traverse(ray, t_min, t_max, |tri, prism, t_max| {
                 if query.is_done(t_max) {
                     return None;
                 }
-                let hit = self.intersect_blas(tri, prism, nl, t_min, t_max, stats)?;
+                stats.prism_tests += 1;
+                if let Some(found) = self.intersect_straight(tri, prism, ray, [t_min, t_max], stats)
+                {
+                    let hit = found?;
+                    return Some((hit, query.range_after(hit.hit.t)));
+                }
+                let nl = NonlinearRay::with_perpendiculars(prism, ray, frame);
+                // Eq. 6 sees the origin only through its offset across the ray, which is below the
+                // prism box's size for a ray that entered the box, and the box lies within
+                // `max_world_coordinate` (checked at construction): finite. A NaN curve would have
+                // the walk visit every node (every comparison with NaN fails).
+                debug_assert!(nl.is_finite(), "{nl:?} in {prism:?}");
+                let hit = self.intersect_blas(tri, prism, &nl, t_min, t_max, stats)?;
                 Some((hit, query.range_after(hit.hit.t)))
             })
     }

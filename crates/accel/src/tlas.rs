@@ -8,7 +8,6 @@ use nlrt_shellmap::{NonlinearRay, Prism, Ray, max_world_coordinate};
 
 use crate::bvh::{Bvh4, SlabRay, sah_excess};
 use crate::mesh::{BaseMesh, prism_bounds};
-use crate::stats::TraversalStats;
 
 /// Texel coordinates beyond this (in one axis, after tiling) are rejected: they keep every
 /// texel corner exactly representable in `f32` (24-bit significand) with room to spare.
@@ -239,37 +238,7 @@ impl<T: Real> PrismTlas<T> {
         best
     }
 
-    /// [`PrismTlas::traverse`], then `blas(triangle, prism, nonlinear ray, t_max)` (which
-    /// finds where the ray is inside the prism itself: [`walk_cells`]).
-    pub(crate) fn intersect<H>(
-        &self,
-        ray: &Ray<T>,
-        t_min: T,
-        t_max: T,
-        stats: &mut TraversalStats,
-        mut blas: impl FnMut(
-            usize,
-            &Prism<T>,
-            &NonlinearRay<T>,
-            T,
-            &mut TraversalStats,
-        ) -> Option<(H, T)>,
-    ) -> Option<H> {
-        // Eq. 6's frame depends on the ray alone: set up once for all its prisms.
-        let frame = ray.perpendiculars();
-        self.traverse(ray, t_min, t_max, |tri, prism, t_max| {
-            stats.prism_tests += 1;
-            let nl = NonlinearRay::with_perpendiculars(prism, ray, frame);
-            // Eq. 6 sees the origin only through its offset across the ray, which is below
-            // the prism box's size for a ray that entered the box, and the box lies within
-            // `max_world_coordinate` (checked at construction): finite. A NaN curve would
-            // have the walk visit every node (every comparison with NaN fails).
-            debug_assert!(nl.is_finite(), "{nl:?} in {prism:?}");
-            blas(tri, prism, &nl, t_max, stats)
-        })
-    }
-
-    /// Every triangle, no TLAS and no gate: `per_triangle` as in [`PrismTlas::intersect`].
+    /// Every triangle, no TLAS and no gate: `per_triangle(triangle, prism, nonlinear ray, t_max)` per triangle, returning a hit and the new `t_max`.
     pub(crate) fn intersect_brute_force<H>(
         &self,
         ray: &Ray<T>,

@@ -84,24 +84,17 @@ fn main() {
         spp: 1,
         bounces: 1,
     };
-    let mut narrow = Nonlinear::<f32>::new(&scene);
+    let narrow = Nonlinear::<f32>::new(&scene);
     let (_, stream) = render_recording(&scene, &narrow, &opts);
     // The curved walk on every prism beside the default (the straight walk on affine
     // patches), where the scene has affine patches.
-    let straight = match &mut narrow {
-        Nonlinear::Displaced(s) => s.straight_triangles(),
-        Nonlinear::Shell(_) => 0,
-    };
+    let straight = narrow.straight_triangles();
     let curved = |mut nl: Nonlinear<f32>| {
-        if let Nonlinear::Displaced(s) = &mut nl {
-            s.set_straight_walk(false);
-        }
+        nl.set_straight_walk(false);
         nl
     };
     let curved_wide = |mut nl: Nonlinear<f64>| {
-        if let Nonlinear::Displaced(s) = &mut nl {
-            s.set_straight_walk(false);
-        }
+        nl.set_straight_walk(false);
         nl
     };
     let variants: Vec<(&str, Variant)> = [

@@ -140,14 +140,12 @@ fn run<T: Real>(name: &str, scene: &Scene, w: usize, walk: Walk) {
         return;
     }
     let mut nl = Nonlinear::<T>::new(scene);
-    if let Nonlinear::Displaced(s) = &mut nl {
-        s.set_straight_walk(walk == Walk::Straight);
-        println!(
-            "{name}: {} of {} base triangles walked straight",
-            s.straight_triangles(),
-            s.mesh().triangle_count()
-        );
-    }
+    nl.set_straight_walk(walk == Walk::Straight);
+    println!(
+        "{name}: {} of {} base triangles walked straight",
+        nl.straight_triangles(),
+        scene.triangles.len()
+    );
     let t0 = std::time::Instant::now();
     let (hits, st, checksum) = trace_all(scene, &nl, w, h);
     let n = (w * h) as f64;

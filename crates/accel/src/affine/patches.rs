@@ -239,7 +239,7 @@ impl<T: Real> TexelTriangle<T> {
     /// (once per hit), where a thin uv triangle's inverse does not overflow as it may in
     /// `f32`; a coordinate that is still not finite (a uv triangle thinner than `f64` sees) is
     /// taken as 0.
-    pub(super) fn canonical(&self, q: [T; 2]) -> (T, T) {
+    pub(crate) fn canonical(&self, q: [T; 2]) -> (T, T) {
         let c = self.corners[0];
         let d = [q[0].to_f64() - c[0].to_f64(), q[1].to_f64() - c[1].to_f64()];
         let m = &self.to_canonical;

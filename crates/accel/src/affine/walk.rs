@@ -36,13 +36,15 @@ pub(crate) struct StraightHit<T: Real> {
 }
 
 /// The walk's per-prism state: the line, its clip to the triangle, the paddings.
-struct Walk<'a, T: Real> {
+pub(crate) struct Walk<'a, T: Real> {
     line: StraightLine<T>,
     triangle: &'a TexelTriangle<T>,
     /// Woop's frame: the dominant axis of the direction last, shears of the other two.
     axes: [usize; 3],
     shear: [T; 3],
     pad_xy: T,
+    /// The padding of the line's heights, in height units (`[0, 1]` the shell).
+    pad_h: T,
     /// How far beyond an open base edge (one shared with a triangle walked on another line
     /// or on its curve) a hit point is still owned, in texels: a bound on the hit point's
     /// error, so that a hit on this side is never disowned by rounding alone.
@@ -56,6 +58,9 @@ struct Walk<'a, T: Real> {
     /// The world ray's `t` at the line's origin, and the smallest `t` accepted.
     t0: T,
     t_min: T,
+    /// The line's parameters inside the triangle's prism (the clip, padded).
+    t_lo: T,
+    t_hi: T,
 }
 
 /// A sample as a height in `[0, 1]`, as the curved path converts it.
@@ -125,6 +130,221 @@ fn watertight<T: Real>(a: [T; 3], b: [T; 3], c: [T; 3]) -> Option<(T, [T; 3])> {
     }
     let t = u.mul_add(a[2], v.mul_add(b[2], w * c[2])) / det;
     Some((t, [u / det, v / det, w / det]))
+}
+
+impl<'a, T: Real> Walk<'a, T> {
+    /// The walk of `line` through `triangle`'s prism for world distances in `[t_min,
+    /// t_max]`: the line clipped to the prism (`None` when it misses), Woop's frame, the
+    /// paddings of its rounding.
+    pub(crate) fn new(
+        line: StraightLine<T>,
+        triangle: &'a TexelTriangle<T>,
+        t_min: T,
+        t_max: T,
+    ) -> Option<Self> {
+        // In line parameters (`tau = t - t0`).
+        let (t0, _) = line.t0;
+        let (t_lo, t_hi) = clip(&line, triangle, t_min.to_f64() - t0, t_max.to_f64() - t0)?;
+        let kz = {
+            let d = line.dir.map(|v| v.abs());
+            if d[0] >= d[1] && d[0] >= d[2] {
+                0
+            } else if d[1] >= d[2] {
+                1
+            } else {
+                2
+            }
+        };
+        let (kx, ky) = ((kz + 1) % 3, (kz + 2) % 3);
+        let shear = [
+            line.dir[kx] / line.dir[kz],
+            line.dir[ky] / line.dir[kz],
+            T::ONE / line.dir[kz],
+        ];
+        // The test's rounding: four roundings in the shear of a corner, on magnitudes up to twice
+        // its distance from the origin (the shears are at most 1), and the same for the line's
+        // point at the walk's far end; in texel units, and in heights.
+        let far = t_hi.abs().max(t_lo.abs());
+        let eps = T::EPSILON;
+        let corner = triangle
+            .corners
+            .iter()
+            .fold(T::ONE, |m, c| m.max(c[0].abs()).max(c[1].abs()));
+        let reach = |a: usize| line.origin[a].abs() + far * line.dir[a].abs();
+        let eight = T::from_i32(8);
+        let pad_xy = eight * eps * (reach(0).max(reach(1)) + corner + T::ONE);
+        let pad_h = eight * eps * (reach(2) + T::ONE);
+        // Heights in sample units: the scaling rounds the origin and direction once more each
+        // (two roundings on magnitudes up to the reach).
+        let samples = T::from_i32(i32::from(HEIGHT_ONE));
+        let pad_samples = samples * (pad_h + T::TWO * eps * (reach(2) + T::ONE));
+        // The hit point's error in `x, y`: the line's (`pad_xy`) and the test's barycentric
+        // combination of the corners (the same roundings on the same magnitudes, `pad_xy` again),
+        // plus the shift along the line that its height error makes where it meets a surface
+        // that is nearly level in texel space (heights span `[0, 1]` over thousands of texels):
+        // `pad_h` times the line's run per unit of rise. Capped at one texel, the clip's
+        // padding across an edge: no hit farther beyond it is ever reported, and a hit whose
+        // point is uncertain by a texel is a grazing one, whose side no rounding decides.
+        let run = line.dir[0].abs().max(line.dir[1].abs());
+        let window = (T::TWO * pad_xy + pad_h * run / line.dir[2].abs()).min(T::ONE);
+        Some(Walk {
+            line,
+            triangle,
+            axes: [kx, ky, kz],
+            shear,
+            pad_xy,
+            pad_h,
+            window,
+            sample_origin: line.origin[2] * samples,
+            sample_dir: line.dir[2] * samples,
+            pad_samples,
+            t0: line.t0.1,
+            t_min,
+            t_lo,
+            t_hi,
+        })
+    }
+}
+
+impl<T: Real> Walk<'_, T> {
+    /// The world ray's `t` at line parameter `tau`.
+    #[inline]
+    pub(crate) fn world_t(&self, tau: T) -> T {
+        self.t0 + tau
+    }
+
+    /// The line parameters at which the line is inside the prism (the clip, padded).
+    #[inline]
+    pub(crate) fn interval(&self) -> (T, T) {
+        (self.t_lo, self.t_hi)
+    }
+
+    /// The hit of the line on the triangle with corners `p` (texel space: `x, y` and
+    /// height) at a line parameter up to `t_max` (and a world distance from `t_min` on)
+    /// whose point the base triangle owns: the line parameter and the point. Two-sided, by
+    /// the watertight test: two triangles that share an edge (the same corner numbers)
+    /// compute its edge function negated, so no line passes between them.
+    #[inline]
+    pub(crate) fn triangle_hit(&self, p: [[T; 3]; 3], t_max: T) -> Option<(T, [T; 3])> {
+        let s = p.map(|q| sheared(self, q));
+        let (t, bary) = watertight(s[0], s[1], s[2])?;
+        if !(t <= t_max && self.t0 + t >= self.t_min) {
+            return None;
+        }
+        let point =
+            |a: usize| bary[0].mul_add(p[0][a], bary[1].mul_add(p[1][a], bary[2] * p[2][a]));
+        let q = [point(0), point(1), point(2)];
+        self.triangle
+            .owns([q[0], q[1]], self.window)
+            .then_some((t, q))
+    }
+
+    /// The line parameters at which the line is in the box `[lo, hi]` (texel space), the
+    /// box padded by the walk's rounding bounds (so that it holds every hit the
+    /// [`Walk::triangle_hit`] of a triangle inside it can report), within `[lo_t, hi_t]`;
+    /// empty when the first exceeds the second.
+    #[inline]
+    pub(crate) fn box_interval(&self, lo: [T; 3], hi: [T; 3], lo_t: T, hi_t: T) -> (T, T) {
+        let l = &self.line;
+        let (p, ph) = (self.pad_xy, self.pad_h);
+        let (ax, bx) = slab(lo[0] - p, hi[0] + p, l.origin[0], l.dir[0], l.inv[0]);
+        let (ay, by) = slab(lo[1] - p, hi[1] + p, l.origin[1], l.dir[1], l.inv[1]);
+        let (ah, bh) = slab(lo[2] - ph, hi[2] + ph, l.origin[2], l.dir[2], l.inv[2]);
+        (
+            greater(greater(ax, ay), greater(ah, lo_t)),
+            lesser(lesser(bx, by), lesser(bh, hi_t)),
+        )
+    }
+}
+
+/// The tiles (unit cells of texel space) of the root nodes `roots` whose padded boxes over
+/// `heights` the line meets, nearest first through the implicit quadtree over them (the
+/// shell's tiles on an affine prism, whose object fills at most those heights in every
+/// tile): `leaf(x, y, t_best, stats)` tests tile `(x, y)` and returns a hit's line
+/// parameter below `t_best` with what it hit. Returns the nearest.
+pub(crate) fn walk_straight_tiles<T: Real, H>(
+    walk: &Walk<'_, T>,
+    roots: RootNodes,
+    heights: [T; 2],
+    stats: &mut TraversalStats,
+    mut leaf: impl FnMut(i32, i32, T, &mut TraversalStats) -> Option<(T, H)>,
+) -> Option<(T, H)> {
+    let (t_lo, mut t_best) = walk.interval();
+    let node_box = |level: u32, x: i32, y: i32, lo: T, hi: T| {
+        let size = T::pow2(level as i32);
+        let (x0, y0) = (T::from_i32(x) * size, T::from_i32(y) * size);
+        walk.box_interval(
+            [x0, y0, heights[0]],
+            [x0 + size, y0 + size, heights[1]],
+            lo,
+            hi,
+        )
+    };
+    let mut best = None;
+    let mut stack = [Node::<T>::default(); STACK];
+    let mut top = 0;
+    let mut entries = [(T::ZERO, T::ZERO, 0i32, 0i32); 4];
+    let mut n = 0;
+    for j in 0..i32::from(roots.ny) {
+        for i in 0..i32::from(roots.nx) {
+            let (x, y) = (roots.x + i, roots.y + j);
+            stats.box_tests += 1;
+            let (t_in, t_out) = node_box(roots.level, x, y, t_lo, t_best);
+            if t_in <= t_out {
+                entries[n] = (t_in, t_out, x, y);
+                n += 1;
+            }
+        }
+    }
+    sort_entries(&mut entries[..n], true);
+    for &(t_in, t_out, x, y) in &entries[..n] {
+        stack[top] = Node {
+            level: roots.level,
+            x,
+            y,
+            t_in,
+            t_out,
+        };
+        top += 1;
+    }
+    while top > 0 {
+        top -= 1;
+        let node = stack[top];
+        if node.t_in > t_best {
+            continue;
+        }
+        if node.level == 0 {
+            if let Some((t, hit)) = leaf(node.x, node.y, t_best, stats) {
+                t_best = t;
+                best = Some((t, hit));
+            }
+            continue;
+        }
+        let mut n = 0;
+        for k in 0..4 {
+            let (x, y) = (2 * node.x + (k & 1), 2 * node.y + (k >> 1));
+            stats.box_tests += 1;
+            let (t_in, t_out) =
+                node_box(node.level - 1, x, y, node.t_in, lesser(node.t_out, t_best));
+            if t_in <= t_out {
+                entries[n] = (t_in, t_out, x, y);
+                n += 1;
+            }
+        }
+        // Farthest first onto the stack: the nearest child is popped next.
+        sort_entries(&mut entries[..n], true);
+        for &(t_in, t_out, x, y) in &entries[..n] {
+            stack[top] = Node {
+                level: node.level - 1,
+                x,
+                y,
+                t_in,
+                t_out,
+            };
+            top += 1;
+        }
+    }
+    best
 }
 
 impl<T: Real> Walk<'_, T> {
@@ -339,64 +559,8 @@ pub(crate) fn walk_straight<T: Real>(
     t_max: T,
     stats: &mut TraversalStats,
 ) -> Option<StraightHit<T>> {
-    // In line parameters (`tau = t - t0`).
-    let (t0, _) = line.t0;
-    let (t_lo, t_hi) = clip(&line, triangle, t_min.to_f64() - t0, t_max.to_f64() - t0)?;
-    let kz = {
-        let d = line.dir.map(|v| v.abs());
-        if d[0] >= d[1] && d[0] >= d[2] {
-            0
-        } else if d[1] >= d[2] {
-            1
-        } else {
-            2
-        }
-    };
-    let (kx, ky) = ((kz + 1) % 3, (kz + 2) % 3);
-    let shear = [
-        line.dir[kx] / line.dir[kz],
-        line.dir[ky] / line.dir[kz],
-        T::ONE / line.dir[kz],
-    ];
-    // The test's rounding: four roundings in the shear of a corner, on magnitudes up to twice
-    // its distance from the origin (the shears are at most 1), and the same for the line's
-    // point at the walk's far end; in texel units, and in heights.
-    let far = t_hi.abs().max(t_lo.abs());
-    let eps = T::EPSILON;
-    let corner = triangle
-        .corners
-        .iter()
-        .fold(T::ONE, |m, c| m.max(c[0].abs()).max(c[1].abs()));
-    let reach = |a: usize| line.origin[a].abs() + far * line.dir[a].abs();
-    let eight = T::from_i32(8);
-    let pad_xy = eight * eps * (reach(0).max(reach(1)) + corner + T::ONE);
-    let pad_h = eight * eps * (reach(2) + T::ONE);
-    // Heights in sample units: the scaling rounds the origin and direction once more each
-    // (two roundings on magnitudes up to the reach).
-    let samples = T::from_i32(i32::from(HEIGHT_ONE));
-    let pad_samples = samples * (pad_h + T::TWO * eps * (reach(2) + T::ONE));
-    // The hit point's error in `x, y`: the line's (`pad_xy`) and the test's barycentric
-    // combination of the corners (the same roundings on the same magnitudes, `pad_xy` again),
-    // plus the shift along the line that its height error makes where it meets a surface
-    // that is nearly level in texel space (heights span `[0, 1]` over thousands of texels):
-    // `pad_h` times the line's run per unit of rise. Capped at one texel, the clip's
-    // padding across an edge: no hit farther beyond it is ever reported, and a hit whose
-    // point is uncertain by a texel is a grazing one, whose side no rounding decides.
-    let run = line.dir[0].abs().max(line.dir[1].abs());
-    let window = (T::TWO * pad_xy + pad_h * run / line.dir[2].abs()).min(T::ONE);
-    let walk = Walk {
-        line,
-        triangle,
-        axes: [kx, ky, kz],
-        shear,
-        pad_xy,
-        window,
-        sample_origin: line.origin[2] * samples,
-        sample_dir: line.dir[2] * samples,
-        pad_samples,
-        t0: line.t0.1,
-        t_min,
-    };
+    let walk = Walk::new(line, triangle, t_min, t_max)?;
+    let (t_lo, t_hi) = (walk.t_lo, walk.t_hi);
     let mut best: Option<StraightHit<T>> = None;
     let mut t_best = t_hi;
     let mut stack = [Node::<T>::default(); STACK];

@@ -40,6 +40,25 @@ impl<T: Real> Nonlinear<T> {
             Content::Shell(_) => Self::Shell(scene.shell_surface().expect(valid)),
         }
     }
+
+    /// Base triangles walked along straight lines ([`DisplacedSurface::straight_triangles`],
+    /// [`ShellSurface::straight_triangles`]).
+    #[must_use]
+    pub fn straight_triangles(&self) -> usize {
+        match self {
+            Self::Displaced(s) => s.straight_triangles(),
+            Self::Shell(s) => s.straight_triangles(),
+        }
+    }
+
+    /// Whether affine patches are walked straight (the default) or every prism along its
+    /// curve ([`DisplacedSurface::set_straight_walk`], [`ShellSurface::set_straight_walk`]).
+    pub fn set_straight_walk(&mut self, on: bool) {
+        match self {
+            Self::Displaced(s) => s.set_straight_walk(on),
+            Self::Shell(s) => s.set_straight_walk(on),
+        }
+    }
 }
 
 impl<T: Real> Nonlinear<T> {
