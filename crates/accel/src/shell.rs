@@ -509,7 +509,9 @@ impl<T: Real> ShellSurface<T> {
             stats,
             |x, y, t_best, stats| self.straight_tile(&walk, [x, y], t_best, stats),
         );
-        let (tau, (q, object_triangle, tile)) = found?;
+        let Some((tau, (q, object_triangle, tile))) = found else {
+            return Some(None);
+        };
         let t = walk.world_t(tau);
         if !(t <= t_max) {
             // The clip's upper end is `t_max - t0` rounded: the nearest hit may lie a rounding

@@ -16,8 +16,8 @@ pub use paper::{
 pub use registry::{BUILTIN, Builtin, MIN_MAP_SIDE, Size, Tag, builtin, is_builtin, names};
 pub use scene::{Camera, Content, Scene};
 pub use variants::{
-    COARSE_TORI, CoarseTorus, coarse_torus, dem_crop, fig9_displaced, ghost_torus, plateau,
-    seam_cube, seam_sphere,
+    COARSE_TORI, CoarseTorus, coarse_torus, cornell_floor, dem_crop, fig9_displaced, ghost_torus,
+    plateau, seam_cube, seam_sphere,
 };
 
 #[cfg(test)]

@@ -86,7 +86,7 @@ fn coarse(k: usize, size: Size) -> Option<Scene> {
 use Tag::{Coarse, Ghost, Report, ReportJudged, Seam, Shell, Variant, Watertight};
 
 /// Every built-in scene, the report's first (in the order it renders them), then the variants.
-pub const BUILTIN: [Builtin; 31] = [
+pub const BUILTIN: [Builtin; 32] = [
     Builtin {
         name: "mountain",
         tags: &[Report, ReportJudged, Watertight],
@@ -241,6 +241,11 @@ pub const BUILTIN: [Builtin; 31] = [
         name: "plateau-grazing",
         tags: &[Variant, Watertight],
         build: |s| Some(plateau_grazing(s)),
+    },
+    Builtin {
+        name: "cornell-floor",
+        tags: &[Variant, Watertight, Shell],
+        build: |s| Some(cornell_floor(s.detail(15, 6))),
     },
     Builtin {
         name: "seam-cube",

@@ -344,6 +344,21 @@ pub fn plateau(side: usize) -> Scene {
     }
 }
 
+/// A floor of shell-mapped tiles, the flat-based shell scene: the mountain's quad (2 base
+/// triangles, one affine patch) holding the Cornell-box object of [`cornell`] tiled 16 x 16,
+/// seen from the mountain's camera. Every ray is walked along its straight line through the
+/// tiles (the shells' straight walk), where `cornell`'s sphere takes the curved walk.
+#[must_use]
+pub fn cornell_floor(n: usize) -> Scene {
+    let mut scene = mountain(64);
+    scene.name = "cornell-floor";
+    scene.content = Content::Shell(cornell_object(n));
+    scene.height_scale = 0.1;
+    scene.tiling = 16.0;
+    scene.motion = Motion::deform(Deformation::Squash);
+    scene
+}
+
 /// A cube as a user's asset has it: 6 faces of 4 x 4 quads, each face its own island of a
 /// 3 x 2 uv atlas (with margins), and normals split at the cube's edges (each face keeps its
 /// own). Every edge of the cube is a uv seam and a normal seam; a clamped fBm map makes the
