@@ -195,8 +195,9 @@ pub struct ShellSurface<T: Real> {
     pub(crate) prisms: PrismTlas<T>,
     object: ShellObject<T>,
     /// The mesh's affine patches (tiles as texels), walked along straight lines
-    /// (`crate::affine`).
-    straight: AffinePatches<T>,
+    /// (`crate::affine`), in `f64` from the prisms in `T` widened exactly: the straight walk
+    /// runs in `f64` whatever `T` (see [`ShellSurface::intersect_blas`] for the curved path).
+    straight: AffinePatches<f64>,
     /// Whether affine patches are walked straight (else every prism takes the curved path).
     straight_walk: bool,
 }
@@ -225,7 +226,7 @@ impl<T: Real> ShellSurface<T> {
                 ShellError::TileRangeTooLarge { triangle, range }
             }
         })?;
-        let straight = AffinePatches::find(&prisms.mesh, height_scale, [tiling; 2], 1);
+        let straight = straight_patches(&prisms);
         Ok(Self {
             prisms,
             object,
@@ -290,12 +291,7 @@ impl<T: Real> ShellSurface<T> {
     ) -> Result<PoseUpdate, MeshError> {
         let update = self.prisms.set_pose(positions, normals, update)?;
         // A pose may make prisms affine or curved: the patches follow it.
-        self.straight = AffinePatches::find(
-            &self.prisms.mesh,
-            self.prisms.height_scale,
-            self.prisms.uv_scale,
-            1,
-        );
+        self.straight = straight_patches(&self.prisms);
         Ok(update)
     }
 
@@ -484,8 +480,11 @@ impl<T: Real> ShellSurface<T> {
     /// straight line in texture space, where the triangle is in an affine patch (`None`
     /// otherwise; `Some(None)` for no hit): the tiles the line's padded slab meets, nearest
     /// first, and in each the object's BVH by slab tests and its triangles by the watertight
-    /// test, in `T` (no windows to bound: the test is exact about which side of a shared
-    /// edge a line passes).
+    /// test (no windows to bound: the test is exact about which side of a shared edge a line
+    /// passes). In `f64` whatever `T`, on the prism, ray, boxes and placed triangles of `T`
+    /// widened exactly, as the curved path traces an `f32` surface: the same speed on
+    /// `cornell-floor` as the walk in `f32`, and 1/100 of its distance error
+    /// (docs/measurements.md, "Shells on affine prisms").
     fn intersect_straight(
         &self,
         tri: usize,
@@ -497,15 +496,20 @@ impl<T: Real> ShellSurface<T> {
         if !self.straight_walk {
             return None;
         }
-        let (line, triangle) = self.straight.line(tri, ray, t_min)?;
+        let wide = Ray::<f64> {
+            origin: ray.origin.to_dvec3(),
+            dir: ray.dir.to_dvec3(),
+        };
+        let (t_min, t_max) = (t_min.to_f64(), t_max.to_f64());
+        let (line, triangle) = self.straight.line(tri, &wide, t_min)?;
         let Some(walk) = line.and_then(|line| Walk::new(line, triangle, t_min, t_max)) else {
             return Some(None);
         };
-        let heights = self.object.h_range;
+        let [h_lo, h_hi] = self.object.h_range.map(|h| h.to_f64());
         let found = walk_straight_tiles(
             &walk,
             self.prisms.roots(tri),
-            heights,
+            [h_lo, h_hi],
             stats,
             |x, y, t_best, stats| self.straight_tile(&walk, [x, y], t_best, stats),
         );
@@ -519,34 +523,37 @@ impl<T: Real> ShellSurface<T> {
             return Some(None);
         }
         let (alpha, beta) = triangle.canonical([q[0], q[1]]);
-        let uv = prism.texture_uv(alpha, beta);
-        Some(Some(ShellHit {
+        let mut hit = Self::narrowed(ShellHit {
             hit: Hit {
                 t,
                 alpha,
                 beta,
-                h: q[2].max(T::ZERO).min(T::ONE),
-                u: uv.x(),
-                v: uv.y(),
+                h: q[2].max(0.0).min(1.0),
+                u: 0.0,
+                v: 0.0,
             },
             triangle: tri as u32,
             tile,
             object_triangle,
-        }))
+        });
+        let uv = prism.texture_uv(hit.hit.alpha, hit.hit.beta);
+        (hit.hit.u, hit.hit.v) = (uv.x(), uv.y());
+        Some(Some(hit))
     }
 
     /// The nearest hit in tile `tile` along `walk`'s line below line parameter `t_best`: the
     /// object's BVH nearest first, its boxes placed in the tile as its triangles are (the
-    /// offset added in `T`, so that each box holds its placed triangles) and padded by the
-    /// walk's rounding bounds; the line parameter, point, object triangle and tile.
+    /// offset added in `T`, so that each box holds its placed triangles, then widened) and
+    /// padded by the walk's rounding bounds; the line parameter, point, object triangle and
+    /// tile.
     #[allow(clippy::type_complexity)]
     fn straight_tile(
         &self,
-        walk: &Walk<'_, T>,
+        walk: &Walk<'_, f64>,
         [x, y]: [i32; 2],
-        t_best: T,
+        t_best: f64,
         stats: &mut TraversalStats,
-    ) -> Option<(T, ([T; 3], u32, [i32; 2]))> {
+    ) -> Option<(f64, ([f64; 3], u32, [i32; 2]))> {
         let nodes = self.object.bvh.nodes();
         let order = self.object.bvh.primitive_order();
         if nodes.is_empty() {
@@ -556,14 +563,14 @@ impl<T: Real> ShellSurface<T> {
         let (dx, dy) = (T::from_i32(x), T::from_i32(y));
         let mut t_best = t_best;
         let mut best = None;
-        let mut stack = SpillStack::<_, OBJECT_STACK>::new((0u32, T::ZERO));
+        let mut stack = SpillStack::<_, OBJECT_STACK>::new((0u32, 0.0));
         stack.push((0, t_lo));
         while let Some((node, entry)) = stack.pop() {
             if entry > t_best {
                 continue;
             }
             let node = &nodes[node as usize];
-            let mut found: [(T, usize); 4] = [(T::ZERO, 0); 4];
+            let mut found: [(f64, usize); 4] = [(0.0, 0); 4];
             let mut n = 0;
             for c in 0..4 {
                 if !Bvh4::is_used(node, c) {
@@ -571,8 +578,9 @@ impl<T: Real> ShellSurface<T> {
                 }
                 let b = &node.bounds[c];
                 stats.box_tests += 1;
-                let lo = [b.lo[0] + dx, b.lo[1] + dy, b.lo[2]];
-                let hi = [b.hi[0] + dx, b.hi[1] + dy, b.hi[2]];
+                let w = T::to_f64;
+                let lo = [w(b.lo[0] + dx), w(b.lo[1] + dy), w(b.lo[2])];
+                let hi = [w(b.hi[0] + dx), w(b.hi[1] + dy), w(b.hi[2])];
                 let (t_in, t_out) = walk.box_interval(lo, hi, t_lo, t_best);
                 if t_in <= t_out {
                     let mut i = n;
@@ -590,7 +598,7 @@ impl<T: Real> ShellSurface<T> {
                     for &k in &order[first..first + node.count[c] as usize] {
                         stats.texel_tests += 1;
                         let placed = Self::shifted(&self.object.triangles[k as usize], x, y)
-                            .map(|p| [p.x(), p.y(), p.z()]);
+                            .map(|p| [p.x().to_f64(), p.y().to_f64(), p.z().to_f64()]);
                         if let Some((tau, q)) = walk.triangle_hit(placed, t_best) {
                             t_best = tau;
                             best = Some((tau, (q, k, [x, y])));
@@ -853,6 +861,22 @@ impl<T: Real> PrismSearch<T> for ShellSurface<T> {
             object_triangle: hit.object_triangle,
         }
     }
+}
+
+/// The affine patches of `prisms`' mesh in `f64`: each prism of `T` widened exactly, its
+/// vertices taken as given to `T`'s roundoff.
+fn straight_patches<T: Real>(prisms: &PrismTlas<T>) -> AffinePatches<f64> {
+    let wide: Vec<Prism<f64>> = (0..prisms.mesh.triangle_count())
+        .map(|i| {
+            let p = prisms.prism(i);
+            Prism::<f64>::new(
+                p.p.map(Vector3::to_dvec3),
+                p.n.map(Vector3::to_dvec3),
+                p.uv.map(Vector2::to_dvec2),
+            )
+        })
+        .collect();
+    AffinePatches::from_prisms(&wide, 1, T::UNIT_ROUNDOFF.to_f64())
 }
 
 /// Whether a shell surface in `T` traces its prisms in `f64` (`T` is narrower).

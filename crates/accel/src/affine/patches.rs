@@ -21,9 +21,10 @@ const SAME_MAP_ROUNDOFFS: f64 = 16.0;
 /// [`MAX_FRAME_CONDITION`] (condition times a few units of `2^-53`) stays below `2^-40`.
 const MIN_SAME_MAP: f64 = 1.0 / (1u64 << 40) as f64;
 
-/// The same-map tolerance of `T` (relative).
-fn same_map<T: Real>() -> f64 {
-    (SAME_MAP_ROUNDOFFS * T::UNIT_ROUNDOFF.to_f64()).max(MIN_SAME_MAP)
+/// The same-map tolerance for vertices given in a precision of unit roundoff `roundoff`
+/// (relative).
+fn same_map(roundoff: f64) -> f64 {
+    (SAME_MAP_ROUNDOFFS * roundoff).max(MIN_SAME_MAP)
 }
 
 /// Frames more ill-conditioned than this (the displacement direction nearly in the base
@@ -128,7 +129,7 @@ impl TexelFrame {
 
     /// Whether this map carries `prism`'s three corners onto its vertices within the
     /// same-map tolerance of `T` and its displacement direction is this one's, bit for bit.
-    fn holds<T: Real>(&self, prism: &Prism<T>, side: f64) -> bool {
+    fn holds<T: Real>(&self, prism: &Prism<T>, side: f64, roundoff: f64) -> bool {
         let n = to_array::<T>(prism.n[0]);
         if prism.n.iter().any(|m| to_array::<T>(*m) != self.columns[2]) || n != self.columns[2] {
             return false;
@@ -144,7 +145,7 @@ impl TexelFrame {
                 let b = self.columns[1][k] * y;
                 let mapped = self.origin[k] + a + b;
                 let scale = self.origin[k].abs() + a.abs() + b.abs() + p[k].abs();
-                (mapped - p[k]).abs() <= same_map::<T>() * scale
+                (mapped - p[k]).abs() <= same_map(roundoff) * scale
             })
         })
     }
@@ -291,11 +292,18 @@ impl<T: Real> AffinePatches<T> {
     /// The patches of `mesh` displaced by `height_scale` with uvs times `uv_scale`, on a grid
     /// of `side` texels per unit.
     pub(crate) fn find(mesh: &BaseMesh<T>, height_scale: T, uv_scale: [T; 2], side: usize) -> Self {
-        let count = mesh.triangle_count();
-        let side_f = side as f64;
-        let prisms: Vec<Prism<T>> = (0..count)
+        let prisms: Vec<Prism<T>> = (0..mesh.triangle_count())
             .map(|i| mesh.prism(i, height_scale, uv_scale))
             .collect();
+        Self::from_prisms(&prisms, side, T::UNIT_ROUNDOFF.to_f64())
+    }
+
+    /// The patches of the base triangles' `prisms` (uvs tiled, directions scaled) on a grid
+    /// of `side` texels per unit, their vertices given to a unit roundoff of `roundoff` (that
+    /// of `T`, or of a narrower type they were widened from exactly).
+    pub(crate) fn from_prisms(prisms: &[Prism<T>], side: usize, roundoff: f64) -> Self {
+        let count = prisms.len();
+        let side_f = side as f64;
         let frames: Vec<Option<TexelFrame>> = prisms
             .iter()
             .map(|p| TexelFrame::of_prism(p, side_f))
@@ -355,8 +363,8 @@ impl<T: Real> AffinePatches<T> {
             let (i, j) = (group[0].1 as usize, group[1].1 as usize);
             let joined = !blocked[i]
                 && !blocked[j]
-                && frames[i].is_some_and(|f| f.holds(&prisms[j], side_f))
-                && frames[j].is_some_and(|f| f.holds(&prisms[i], side_f));
+                && frames[i].is_some_and(|f| f.holds(&prisms[j], side_f, roundoff))
+                && frames[j].is_some_and(|f| f.holds(&prisms[i], side_f, roundoff));
             if joined {
                 let (a, b) = (find(&mut parent, group[0].1), find(&mut parent, group[1].1));
                 parent[a.max(b) as usize] = a.min(b);
@@ -408,7 +416,7 @@ impl<T: Real> AffinePatches<T> {
         let mut usable: Vec<bool> = fitted.iter().map(Option::is_some).collect();
         for i in 0..count {
             let r = roots[i] as usize;
-            let fits = fitted[r].is_some_and(|f| f.holds(&prisms[i], side_f));
+            let fits = fitted[r].is_some_and(|f| f.holds(&prisms[i], side_f, roundoff));
             if blocked[i] || !fits {
                 usable[r] = false;
             }
