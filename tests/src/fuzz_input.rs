@@ -670,6 +670,14 @@ pub fn seam_seed<T: Real>(seed: u64) -> Vec<u8> {
 pub fn shell_case<T: Real>(
     data: &[u8],
 ) -> Result<(nlrt_accel::ShellSurface<T>, nlrt_shellmap::Ray<T>), String> {
+    shell_case_with::<T>(data, false)
+}
+
+/// [`shell_case`], or with `affine` its affine variant ([`affine_shell_case`]).
+fn shell_case_with<T: Real>(
+    data: &[u8],
+    affine: bool,
+) -> Result<(nlrt_accel::ShellSurface<T>, nlrt_shellmap::Ray<T>), String> {
     use nlrt_accel::{ShellObject, ShellSurface};
     use nlrt_poly::Vector3;
     let header = data.first().copied().unwrap_or(0);
@@ -694,19 +702,66 @@ pub fn shell_case<T: Real>(
         .collect();
     let object = ShellObject::new(object).map_err(|e| e.to_string())?;
     let (mesh, ray) = base_and_ray(&x).ok_or("no valid base triangle and ray")?;
+    let mesh = if affine {
+        if mesh.normals().iter().all(|n| *n == mesh.normals()[0]) {
+            return Err("the case is affine already".into());
+        }
+        nlrt_accel::BaseMesh::new(
+            mesh.positions().to_vec(),
+            vec![mesh.normals()[0]; 3],
+            mesh.uvs().to_vec(),
+            vec![[0, 1, 2]],
+        )
+        .map_err(|e| e.to_string())?
+    } else {
+        mesh
+    };
     let surface = ShellSurface::new(mesh, object, T::ONE, tiling).map_err(|e| e.to_string())?;
     Ok((surface, ray))
 }
 
+/// [`shell_case`] with the base triangle's first direction at all three corners (an affine
+/// prism, walked along the straight line where its frame is well-conditioned); an error
+/// where the directions were equal already (the case itself is affine).
+///
+/// # Errors
+/// As [`shell_case`].
+pub fn affine_shell_case<T: Real>(
+    data: &[u8],
+) -> Result<(nlrt_accel::ShellSurface<T>, nlrt_shellmap::Ray<T>), String> {
+    shell_case_with::<T>(data, true)
+}
+
 /// The shell traversal target: up to four object triangles in the unit tile (raw values;
 /// out-of-tile objects must be rejected cleanly), tiling 1 to 8, one base triangle and a
-/// ray. Same properties as [`fuzz_displacement`], and the occlusion query agrees with the
-/// nearest hit on whether there is one.
+/// ray. Same properties as [`fuzz_displacement`] (the straight walk's hits where the
+/// triangle is affine and on its affine variant, the curved walk against brute force), and
+/// the occlusion query agrees with the nearest hit on whether there is one.
 pub fn fuzz_shell<T: Real>(data: &[u8]) {
     use nlrt_accel::TraversalStats;
-    let Ok((surface, ray)) = shell_case::<T>(data) else {
+    let Ok((mut surface, ray)) = shell_case::<T>(data) else {
         return;
     };
+    // The straight walk, where the triangle is affine, and again with its first direction at
+    // every corner: a hit is checked as every hit, and the occlusion query agrees with it;
+    // the comparison with brute force (the same arithmetic) is the curved walk's.
+    let affine = affine_shell_case::<T>(data).ok().map(|(s, _)| s);
+    for straight in [(surface.straight_triangles() > 0).then_some(&surface), affine.as_ref()]
+        .into_iter()
+        .flatten()
+    {
+        let hit = straight.intersect(&ray, T::ZERO, T::INFINITY, &mut TraversalStats::default());
+        assert_eq!(
+            straight.occluded(&ray, T::ZERO, T::INFINITY, &mut TraversalStats::default()),
+            hit.is_some(),
+            "straight occlusion query against {hit:?}"
+        );
+        if let Some(hit) = hit {
+            check_traversal_hit(&hit.hit, &hit);
+        }
+    }
+    surface.set_straight_walk(false);
+    let surface = surface;
     let fast = surface.intersect(&ray, T::ZERO, T::INFINITY, &mut TraversalStats::default());
     // The occlusion query asks the same prisms with the same range until one holds a hit.
     assert_eq!(

@@ -9,7 +9,7 @@ use core::fmt;
 use nlrt_poly::{Real, Vector2, Vector3};
 use nlrt_shellmap::{
     BaseEdges, Hit, NonlinearRay, Prism, Ray, TextureCurve, TexturePlane, WideRay, facing_unit,
-    world_normal,
+    onto_base_triangle, world_normal,
 };
 
 use crate::affine::{AffinePatches, Walk, walk_straight_tiles};
@@ -536,6 +536,8 @@ impl<T: Real> ShellSurface<T> {
             tile,
             object_triangle,
         });
+        // Rounding to `T` may carry the sum 1 ulp past 1.
+        (hit.hit.alpha, hit.hit.beta) = onto_base_triangle(hit.hit.alpha, hit.hit.beta);
         let uv = prism.texture_uv(hit.hit.alpha, hit.hit.beta);
         (hit.hit.u, hit.hit.v) = (uv.x(), uv.y());
         Some(Some(hit))
