@@ -746,9 +746,12 @@ pub fn fuzz_shell<T: Real>(data: &[u8]) {
     // every corner: a hit is checked as every hit, and the occlusion query agrees with it;
     // the comparison with brute force (the same arithmetic) is the curved walk's.
     let affine = affine_shell_case::<T>(data).ok().map(|(s, _)| s);
-    for straight in [(surface.straight_triangles() > 0).then_some(&surface), affine.as_ref()]
-        .into_iter()
-        .flatten()
+    for straight in [
+        (surface.straight_triangles() > 0).then_some(&surface),
+        affine.as_ref(),
+    ]
+    .into_iter()
+    .flatten()
     {
         let hit = straight.intersect(&ray, T::ZERO, T::INFINITY, &mut TraversalStats::default());
         assert_eq!(

@@ -282,31 +282,11 @@ pub(crate) fn walk_straight_tiles<T: Real, H>(
     };
     let mut best = None;
     let mut stack = [Node::<T>::default(); STACK];
-    let mut top = 0;
     let mut entries = [(T::ZERO, T::ZERO, 0i32, 0i32); 4];
-    let mut n = 0;
-    for j in 0..i32::from(roots.ny) {
-        for i in 0..i32::from(roots.nx) {
-            let (x, y) = (roots.x + i, roots.y + j);
-            stats.box_tests += 1;
-            let (t_in, t_out) = node_box(roots.level, x, y, t_lo, t_best);
-            if t_in <= t_out {
-                entries[n] = (t_in, t_out, x, y);
-                n += 1;
-            }
-        }
-    }
-    sort_entries(&mut entries[..n], true);
-    for &(t_in, t_out, x, y) in &entries[..n] {
-        stack[top] = Node {
-            level: roots.level,
-            x,
-            y,
-            t_in,
-            t_out,
-        };
-        top += 1;
-    }
+    let mut top = push_roots(&mut stack, roots, stats, |x, y| {
+        let (t_in, t_out) = node_box(roots.level, x, y, t_lo, t_best);
+        (t_in <= t_out).then_some((t_in, t_out))
+    });
     while top > 0 {
         top -= 1;
         let node = stack[top];
@@ -331,18 +311,7 @@ pub(crate) fn walk_straight_tiles<T: Real, H>(
                 n += 1;
             }
         }
-        // Farthest first onto the stack: the nearest child is popped next.
-        sort_entries(&mut entries[..n], true);
-        for &(t_in, t_out, x, y) in &entries[..n] {
-            stack[top] = Node {
-                level: node.level - 1,
-                x,
-                y,
-                t_in,
-                t_out,
-            };
-            top += 1;
-        }
+        top = push_nearest_last(&mut stack, top, node.level - 1, &mut entries[..n]);
     }
     best
 }
@@ -532,6 +501,52 @@ fn greater<T: Real>(a: T, b: T) -> T {
     if a > b { a } else { b }
 }
 
+/// Pushes `entries` (nodes `(t_in, t_out, x, y)` of `level`) onto the walk's stack at
+/// `top`, farthest first, so that the nearest is popped next; returns the new top.
+#[inline]
+fn push_nearest_last<T: Real>(
+    stack: &mut [Node<T>; STACK],
+    top: usize,
+    level: u32,
+    entries: &mut [(T, T, i32, i32)],
+) -> usize {
+    sort_entries(entries, true);
+    for (k, &(t_in, t_out, x, y)) in entries.iter().enumerate() {
+        stack[top + k] = Node {
+            level,
+            x,
+            y,
+            t_in,
+            t_out,
+        };
+    }
+    top + entries.len()
+}
+
+/// The root nodes of `roots` whose line interval `enter(x, y)` exists (each counted as a
+/// box test), pushed onto an empty stack by [`push_nearest_last`]; returns the top.
+#[inline]
+fn push_roots<T: Real>(
+    stack: &mut [Node<T>; STACK],
+    roots: RootNodes,
+    stats: &mut TraversalStats,
+    mut enter: impl FnMut(i32, i32) -> Option<(T, T)>,
+) -> usize {
+    let mut entries = [(T::ZERO, T::ZERO, 0i32, 0i32); 4];
+    let mut n = 0;
+    for j in 0..i32::from(roots.ny) {
+        for i in 0..i32::from(roots.nx) {
+            let (x, y) = (roots.x + i, roots.y + j);
+            stats.box_tests += 1;
+            if let Some((t_in, t_out)) = enter(x, y) {
+                entries[n] = (t_in, t_out, x, y);
+                n += 1;
+            }
+        }
+    }
+    push_nearest_last(stack, 0, roots.level, &mut entries[..n])
+}
+
 /// Up to four `(t_in, t_out, x, y)` sorted by `t_in`, farthest first (`descending`) or
 /// nearest first.
 #[inline]
@@ -564,32 +579,12 @@ pub(crate) fn walk_straight<T: Real>(
     let mut best: Option<StraightHit<T>> = None;
     let mut t_best = t_hi;
     let mut stack = [Node::<T>::default(); STACK];
-    let mut top = 0;
     let mut entries = [(T::ZERO, T::ZERO, 0i32, 0i32); 4];
-    let mut n = 0;
-    for j in 0..i32::from(roots.ny) {
-        for i in 0..i32::from(roots.nx) {
-            let (x, y) = (roots.x + i, roots.y + j);
-            stats.box_tests += 1;
-            let bounds = field.texel_bounds(roots.level, i64::from(x), i64::from(y));
-            let interval = walk.node(roots.level, x, y, t_lo, t_hi);
-            if walk.meets(interval, bounds) {
-                entries[n] = (interval.0, interval.1, x, y);
-                n += 1;
-            }
-        }
-    }
-    sort_entries(&mut entries[..n], true);
-    for &(t_in, t_out, x, y) in &entries[..n] {
-        stack[top] = Node {
-            level: roots.level,
-            x,
-            y,
-            t_in,
-            t_out,
-        };
-        top += 1;
-    }
+    let mut top = push_roots(&mut stack, roots, stats, |x, y| {
+        let bounds = field.texel_bounds(roots.level, i64::from(x), i64::from(y));
+        let interval = walk.node(roots.level, x, y, t_lo, t_hi);
+        walk.meets(interval, bounds).then_some(interval)
+    });
     while top > 0 {
         top -= 1;
         let node = stack[top];
