@@ -210,16 +210,12 @@ pub fn coarse_torus(name: &'static str, shape: CoarseTorus, side: usize) -> Scen
     scene
 }
 
-/// Fig. 9's seven columns (regular; uv-degenerate to a line and to a point; prisms pinching
-/// to a line and to a point; a triangle degenerate in world and uv; in world only) displaced by
-/// an fBm map instead of shell-mapped by an object, for the watertightness measurement: the
-/// map is clamped and fades to exactly zero on its border (a `sin(pi u) sin(pi v)` window), so
-/// a ray can get under the surface of the pinched columns only through it.
-#[must_use]
-pub fn fig9_displaced(side: usize) -> Scene {
-    let noise = fbm_map(side, 4, 6, 23);
+/// A `side x side` map `noise` faded to exactly zero on its border: each sample times
+/// `shape` of the window `sin(pi u) sin(pi v)` (clamped at 0), so that a clamped map leaves no
+/// way under the surface through a mesh border on the uv square's edges.
+fn faded_to_zero_border(noise: &[f32], side: usize, shape: impl Fn(f64) -> f64) -> Vec<f32> {
     let last = (side - 1) as f64;
-    let heights: Vec<f32> = noise
+    noise
         .iter()
         .enumerate()
         .map(|(k, &h)| {
@@ -231,10 +227,20 @@ pub fn fig9_displaced(side: usize) -> Scene {
             if on_border {
                 0.0
             } else {
-                (f64::from(h) * window).max(0.0) as f32
+                (f64::from(h) * shape(window)).max(0.0) as f32
             }
         })
-        .collect();
+        .collect()
+}
+
+/// Fig. 9's seven columns (regular; uv-degenerate to a line and to a point; prisms pinching
+/// to a line and to a point; a triangle degenerate in world and uv; in world only) displaced by
+/// an fBm map instead of shell-mapped by an object, for the watertightness measurement: the
+/// map is clamped and fades to exactly zero on its border (a `sin(pi u) sin(pi v)` window), so
+/// a ray can get under the surface of the pinched columns only through it.
+#[must_use]
+pub fn fig9_displaced(side: usize) -> Scene {
+    let heights = faded_to_zero_border(&fbm_map(side, 4, 6, 23), side, |w| w);
     let mut scene = fig9();
     scene.name = "fig9-displaced";
     scene.content = Content::Displacement(
@@ -300,23 +306,8 @@ pub fn plateau(side: usize) -> Scene {
             triangles.push([idx(i, j), idx(i, j + 1), idx(i + 1, j + 1)]);
         }
     }
-    let noise = fbm_map(side, 4, 6, 29);
-    let last = (side - 1) as f64;
-    let heights: Vec<f32> = noise
-        .iter()
-        .enumerate()
-        .map(|(k, &h)| {
-            let (i, j) = ((k % side) as f64, (k / side) as f64);
-            let window =
-                (std::f64::consts::PI * i / last).sin() * (std::f64::consts::PI * j / last).sin();
-            let on_border = i == 0.0 || j == 0.0 || i == last || j == last;
-            if on_border {
-                0.0
-            } else {
-                (f64::from(h) * window.sqrt()).max(0.0) as f32
-            }
-        })
-        .collect();
+    // The square root of the window: heights stay large up to near the border.
+    let heights = faded_to_zero_border(&fbm_map(side, 4, 6, 29), side, f64::sqrt);
     Scene {
         name: "plateau",
         positions,
