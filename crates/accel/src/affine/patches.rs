@@ -308,6 +308,16 @@ impl<T: Real> AffinePatches<T> {
             .iter()
             .map(|p| TexelFrame::of_prism(p, side_f))
             .collect();
+        if frames.iter().all(Option::is_none) {
+            // No affine prism (a smooth curved mesh, every pose of an animation): no patch,
+            // and no edge to sort.
+            return Self {
+                patch_of: vec![CURVED; count],
+                frames: Vec::new(),
+                boxes: Vec::new(),
+                triangles: vec![None; count],
+            };
+        }
         // Edges keyed by their two positions' bits (the smaller key first), with the uvs at
         // those positions: triangles meeting there share the edge.
         let key = |v: T::Vec3| to_array::<T>(v).map(f64::to_bits);
