@@ -528,7 +528,7 @@ impl<T: Real> ShellSurface<T> {
                 t,
                 alpha,
                 beta,
-                h: q[2].max(0.0).min(1.0),
+                h: q[2].clamp(0.0, 1.0),
                 u: 0.0,
                 v: 0.0,
             },
