@@ -103,13 +103,17 @@ mod tests {
         /// bent at its last column of vertices: two patches meeting at a crease (16 and 8
         /// triangles), the second beside 8 curved triangles.
         Mixed,
+        /// `Flat` with each interior vertex's uv moved by up to a fifth of a grid cell at
+        /// random: a plane whose triangles' affine maps all differ, so each is a patch of its
+        /// own and every interior edge is open.
+        Jittered,
     }
 
     impl Shape {
         /// Triangles walked straight.
         fn straight_triangles(self) -> usize {
             match self {
-                Shape::Flat => 18,
+                Shape::Flat | Shape::Jittered => 18,
                 Shape::Mixed => 24,
             }
         }
@@ -122,6 +126,41 @@ mod tests {
         let uv = ([0.4, 1.3], [0.2, -0.7]);
         match shape {
             Shape::Flat => grid::<T>(3, frame, n, uv.0, uv.1),
+            Shape::Jittered => {
+                let flat = grid::<T>(3, frame, n, uv.0, uv.1);
+                let mut r = unit_randoms(29);
+                let cell = 1.3 / 3.0;
+                let uvs = flat
+                    .uvs()
+                    .iter()
+                    .enumerate()
+                    .map(|(v, &uv)| {
+                        let (i, j) = (v % 4, v / 4);
+                        let interior = (1..3).contains(&i) && (1..3).contains(&j);
+                        let (du, dv) = if interior {
+                            (
+                                0.2 * cell * (2.0 * r() - 1.0),
+                                0.2 * cell * (2.0 * r() - 1.0),
+                            )
+                        } else {
+                            (0.0, 0.0)
+                        };
+                        T::Vec2::new(
+                            T::from_f64(uv.x().to_f64() + du),
+                            T::from_f64(uv.y().to_f64() + dv),
+                        )
+                    })
+                    .collect();
+                BaseMesh::new(
+                    flat.positions().to_vec(),
+                    flat.normals().to_vec(),
+                    uvs,
+                    (0..flat.triangle_count())
+                        .map(|i| flat.triangle(i))
+                        .collect(),
+                )
+                .expect("a valid grid")
+            }
             Shape::Mixed => {
                 let k = 4;
                 let flat = grid::<T>(k, frame, n, uv.0, uv.1);
@@ -284,6 +323,23 @@ mod tests {
     }
 
     #[test]
+    fn straight_patches_of_one_triangle_match_f64() {
+        // Every triangle its own patch: each has an open edge (its diagonal at least).
+        let mesh = tilted_mesh::<f64>(Shape::Jittered);
+        let patches = super::AffinePatches::find(&mesh, 0.6, [1.0, 1.0], 16);
+        let open = patches
+            .triangles()
+            .iter()
+            .flatten()
+            .filter(|t| t.has_open_edge())
+            .count();
+        assert_eq!(open, 18);
+        let curved_off = straight_walk_matches_f64::<f32>(Shape::Jittered, 1e-4);
+        assert!(curved_off <= 1, "{curved_off}");
+        assert_eq!(straight_walk_matches_f64::<f64>(Shape::Jittered, 1e-10), 0);
+    }
+
+    #[test]
     fn straight_beside_curved_matches_f64_in_f32() {
         let curved_off = straight_walk_matches_f64::<f32>(Shape::Mixed, 1e-4);
         assert!(curved_off <= 1, "{curved_off}");
@@ -346,12 +402,14 @@ mod tests {
     fn base_edges_do_not_leak_f32() {
         base_edges_do_not_leak::<f32>(Shape::Flat);
         base_edges_do_not_leak::<f32>(Shape::Mixed);
+        base_edges_do_not_leak::<f32>(Shape::Jittered);
     }
 
     #[test]
     fn base_edges_do_not_leak_f64() {
         base_edges_do_not_leak::<f64>(Shape::Flat);
         base_edges_do_not_leak::<f64>(Shape::Mixed);
+        base_edges_do_not_leak::<f64>(Shape::Jittered);
     }
 
     /// Rays aimed from every side at surface points on the open edges of `Shape::Mixed` (the
