@@ -244,7 +244,8 @@ impl<T: Real> ShellSurface<T> {
     }
 
     /// The base triangles walked along straight lines when [`ShellSurface::set_straight_walk`]
-    /// is on: the affine prisms, but those with a uv seam or a non-manifold edge.
+    /// is on: the affine prisms, but those with a uv seam, a non-manifold edge or an
+    /// ill-conditioned frame (a direction nearly in the base plane).
     #[must_use]
     pub fn straight_triangles(&self) -> usize {
         self.straight.straight_triangles()
