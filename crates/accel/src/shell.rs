@@ -494,7 +494,8 @@ impl<T: Real> ShellSurface<T> {
         [t_min, t_max]: [T; 2],
         stats: &mut TraversalStats,
     ) -> Option<Option<ShellHit<T>>> {
-        if !self.straight_walk {
+        // Every prism of a curved mesh passes here: it leaves before any set-up.
+        if !(self.straight_walk && self.straight.is_straight(tri)) {
             return None;
         }
         let wide = Ray::<f64> {

@@ -493,6 +493,12 @@ impl<T: Real> AffinePatches<T> {
         &self.triangles
     }
 
+    /// Whether triangle `tri` is in a patch (walked straight).
+    #[inline]
+    pub(crate) fn is_straight(&self, tri: usize) -> bool {
+        self.patch_of[tri] != CURVED
+    }
+
     /// Triangles walked straight.
     pub(crate) fn straight_triangles(&self) -> usize {
         self.triangles.iter().flatten().count()
