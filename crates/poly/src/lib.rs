@@ -42,6 +42,7 @@ pub mod closed_form;
 mod cubic;
 mod eval;
 mod lanes;
+pub mod lanes4;
 mod quadratic;
 mod quadratic_batch;
 mod real;
@@ -52,6 +53,8 @@ pub use batch::{CUBIC_BATCH, first_cubic_root_batch_in, solve_cubic_batch_in, so
 pub use cubic::{first_cubic_root_in, solve_cubic, solve_cubic_in};
 pub use eval::{decided_sign, horner, horner_with_bound, horner_with_bound_scaled};
 pub use glam;
+pub use lanes::LaneMask;
+pub use lanes4::Lanes4;
 pub use quadratic::{discriminant, quadratic_range, solve_quadratic, solve_quadratic_in};
 pub use quadratic_batch::{QUADRATIC_BATCH, QuadraticBatch, solve_quadratic_batch_in};
 pub use real::Real;

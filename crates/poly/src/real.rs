@@ -64,6 +64,9 @@ pub trait Real:
     /// detail of [`crate::solve_cubic_batch_in`].
     #[doc(hidden)]
     type Batch: crate::lanes::Lanes<Self>;
+    /// Four values side by side for the walks' child steps (one SSE register of `f32` or one
+    /// AVX register of `f64` where the build has AVX2 and FMA, four scalars otherwise).
+    type Four: crate::Lanes4<Self>;
 
     /// 0
     const ZERO: Self;
@@ -279,7 +282,7 @@ pub trait Real:
 /// Implements [`Real`] for one float type; `$f` names the libm functions of that type.
 macro_rules! impl_real {
     (
-        $t:ident, $bits:ty, $vec2:ty, $vec3:ty, $mat3:ty, batch: $batch:ty,
+        $t:ident, $bits:ty, $vec2:ty, $vec3:ty, $mat3:ty, batch: $batch:ty, four: $four:ty,
         sqrt: $sqrt:ident, cbrt: $cbrt:ident, fma: $fma:ident, acos: $acos:ident, cos: $cos:ident,
         hw_fma: $hw_fma:ident, set: $set:ident, get: $get:ident
     ) => {
@@ -289,6 +292,7 @@ macro_rules! impl_real {
             type Mat3 = $mat3;
             type Bits = $bits;
             type Batch = $batch;
+            type Four = $four;
 
             const ZERO: Self = 0.0;
             const ONE: Self = 1.0;
@@ -433,10 +437,10 @@ macro_rules! impl_real {
     };
 }
 
-impl_real!(f32, u32, glam::Vec2, glam::Vec3, glam::Mat3, batch: crate::lanes::F32Lanes,
+impl_real!(f32, u32, glam::Vec2, glam::Vec3, glam::Mat3, batch: crate::lanes::F32Lanes, four: crate::lanes4::F32Lanes4,
     sqrt: sqrtf, cbrt: cbrtf, fma: fmaf, acos: acosf, cos: cosf,
     hw_fma: _mm_fmadd_ss, set: _mm_set_ss, get: _mm_cvtss_f32);
-impl_real!(f64, u64, glam::DVec2, glam::DVec3, glam::DMat3, batch: crate::lanes::F64Lanes,
+impl_real!(f64, u64, glam::DVec2, glam::DVec3, glam::DMat3, batch: crate::lanes::F64Lanes, four: crate::lanes4::F64Lanes4,
     sqrt: sqrt, cbrt: cbrt, fma: fma, acos: acos, cos: cos,
     hw_fma: _mm_fmadd_sd, set: _mm_set_sd, get: _mm_cvtsd_f64);
 

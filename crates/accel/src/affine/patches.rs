@@ -178,7 +178,7 @@ fn edge_function<T: Real>(a: [T; 2], b: [T; 2], q: [T; 2]) -> T {
 impl<T: Real> TexelTriangle<T> {
     /// The triangle of `prism` on a map of `side` texels per unit, with its edges `k`
     /// (corners `k`, `k + 1`) open where `open[k]`.
-    fn new(prism: &Prism<T>, side: T, open: [bool; 3]) -> Self {
+    pub(super) fn new(prism: &Prism<T>, side: T, open: [bool; 3]) -> Self {
         let corners = prism.uv.map(|uv| [uv.x() * side, uv.y() * side]);
         let wide = corners.map(|c| [c[0].to_f64(), c[1].to_f64()]);
         let edges = core::array::from_fn(|k| {
