@@ -574,25 +574,32 @@ impl<T: Real> ShellSurface<T> {
                 continue;
             }
             let node = &nodes[node as usize];
-            let mut found: [(f64, usize); 4] = [(0.0, 0); 4];
-            let mut n = 0;
+            // The four boxes side by side (unused slots left at 0 and masked out), tested in
+            // one vector step.
+            let (mut lo, mut hi) = ([[0.0; 4]; 3], [[0.0; 4]; 3]);
+            let mut used = 0u8;
             for c in 0..4 {
                 if !Bvh4::is_used(node, c) {
                     continue;
                 }
+                used |= 1 << c;
                 let b = &node.bounds[c];
-                stats.box_tests += 1;
                 let w = T::to_f64;
-                let lo = [w(b.lo[0] + dx), w(b.lo[1] + dy), w(b.lo[2])];
-                let hi = [w(b.hi[0] + dx), w(b.hi[1] + dy), w(b.hi[2])];
-                let (t_in, t_out) = walk.box_interval(lo, hi, t_lo, t_best);
-                if t_in <= t_out {
+                [lo[0][c], lo[1][c], lo[2][c]] = [w(b.lo[0] + dx), w(b.lo[1] + dy), w(b.lo[2])];
+                [hi[0][c], hi[1][c], hi[2][c]] = [w(b.hi[0] + dx), w(b.hi[1] + dy), w(b.hi[2])];
+            }
+            stats.box_tests += used.count_ones();
+            let (t_in, _, met) = walk.four_box_intervals(lo, hi, t_lo, t_best);
+            let mut found: [(f64, usize); 4] = [(0.0, 0); 4];
+            let mut n = 0;
+            for (c, &t) in t_in.iter().enumerate() {
+                if (met & used) >> c & 1 == 1 {
                     let mut i = n;
-                    while i > 0 && found[i - 1].0 > t_in {
+                    while i > 0 && found[i - 1].0 > t {
                         found[i] = found[i - 1];
                         i -= 1;
                     }
-                    found[i] = (t_in, c);
+                    found[i] = (t, c);
                     n += 1;
                 }
             }

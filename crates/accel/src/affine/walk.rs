@@ -255,6 +255,73 @@ impl<T: Real> Walk<'_, T> {
             lesser(lesser(bx, by), lesser(bh, hi_t)),
         )
     }
+
+    /// [`Walk::box_interval`] of four boxes in one vector step ([`Real::Four`], lane `k` box
+    /// `k`; `lo[axis][k]`, `hi[axis][k]`): the intervals' ends and, as bit `k` of the mask,
+    /// whether box `k`'s is not empty. The same bits as four calls of `box_interval`
+    /// (tested): where the line's direction has a component whose reciprocal is not finite
+    /// (0, or below `1 / MAX`), whose slab is not a product by it, it makes those calls.
+    #[inline]
+    pub(crate) fn four_box_intervals(
+        &self,
+        lo: [[T; 4]; 3],
+        hi: [[T; 4]; 3],
+        lo_t: T,
+        hi_t: T,
+    ) -> ([T; 4], [T; 4], u8) {
+        if self.line.inv.iter().all(|v| v.is_finite()) {
+            return self.four_box_intervals_in::<T::Four>(lo, hi, lo_t, hi_t);
+        }
+        self.four_box_intervals_scalar(lo, hi, lo_t, hi_t)
+    }
+
+    /// [`Walk::four_box_intervals`] one box at a time: the reference of the vector step.
+    fn four_box_intervals_scalar(
+        &self,
+        lo: [[T; 4]; 3],
+        hi: [[T; 4]; 3],
+        lo_t: T,
+        hi_t: T,
+    ) -> ([T; 4], [T; 4], u8) {
+        let (mut t_in, mut t_out, mut mask) = ([T::ZERO; 4], [T::ZERO; 4], 0);
+        for k in 0..4 {
+            let corner = |c: &[[T; 4]; 3]| [c[0][k], c[1][k], c[2][k]];
+            (t_in[k], t_out[k]) = self.box_interval(corner(&lo), corner(&hi), lo_t, hi_t);
+            mask |= u8::from(t_in[k] <= t_out[k]) << k;
+        }
+        (t_in, t_out, mask)
+    }
+
+    /// [`Walk::four_box_intervals`] in lanes `L`, for a line whose direction's reciprocals
+    /// are finite: a slab's ends are then never NaN (finite differences times finite
+    /// reciprocals), where `lesser` and `greater` pick what `Real::min` and `Real::max`
+    /// pick (two equal ends of one slab are the same number: its sides are `2 p` apart).
+    #[inline(always)]
+    fn four_box_intervals_in<L: Lanes4<T>>(
+        &self,
+        lo: [[T; 4]; 3],
+        hi: [[T; 4]; 3],
+        lo_t: T,
+        hi_t: T,
+    ) -> ([T; 4], [T; 4], u8) {
+        let l = &self.line;
+        let slab = |axis: usize, pad: T| {
+            let (o, inv, pad) = (
+                L::splat(l.origin[axis]),
+                L::splat(l.inv[axis]),
+                L::splat(pad),
+            );
+            let a = (L::from_array(lo[axis]) - pad - o) * inv;
+            let b = (L::from_array(hi[axis]) + pad - o) * inv;
+            (a.lesser(b), a.greater(b))
+        };
+        let (ax, bx) = slab(0, self.pad_xy);
+        let (ay, by) = slab(1, self.pad_xy);
+        let (ah, bh) = slab(2, self.pad_h);
+        let t_in = ax.greater(ay).greater(ah.greater(L::splat(lo_t)));
+        let t_out = bx.lesser(by).lesser(bh.lesser(L::splat(hi_t)));
+        (t_in.to_array(), t_out.to_array(), t_in.le(t_out).bits())
+    }
 }
 
 /// The tiles (unit cells of texel space) of the root nodes `roots` whose padded boxes over
@@ -300,14 +367,23 @@ pub(crate) fn walk_straight_tiles<T: Real, H>(
             }
             continue;
         }
+        // The four children's boxes side by side, tested in one vector step.
+        let size = T::pow2(node.level as i32 - 1);
+        let corner = |c: i32, k: usize| T::from_i32(2 * c + k as i32) * size;
+        let x0: [T; 4] = core::array::from_fn(|k| corner(node.x, k & 1));
+        let y0: [T; 4] = core::array::from_fn(|k| corner(node.y, k >> 1));
+        let (lo, hi) = (
+            [x0, y0, [heights[0]; 4]],
+            [x0.map(|v| v + size), y0.map(|v| v + size), [heights[1]; 4]],
+        );
+        let (t_in, t_out, met) =
+            walk.four_box_intervals(lo, hi, node.t_in, lesser(node.t_out, t_best));
+        stats.box_tests += 4;
         let mut n = 0;
         for k in 0..4 {
-            let (x, y) = (2 * node.x + (k & 1), 2 * node.y + (k >> 1));
-            stats.box_tests += 1;
-            let (t_in, t_out) =
-                node_box(node.level - 1, x, y, node.t_in, lesser(node.t_out, t_best));
-            if t_in <= t_out {
-                entries[n] = (t_in, t_out, x, y);
+            if met >> k & 1 == 1 {
+                let (x, y) = (2 * node.x + (k & 1) as i32, 2 * node.y + (k >> 1) as i32);
+                entries[n] = (t_in[k], t_out[k], x, y);
                 n += 1;
             }
         }
@@ -959,6 +1035,83 @@ mod tests {
             cases > 15_000 && met > 5_000 && missed > 5_000,
             "{cases} {met} {missed}"
         );
+    }
+
+    /// The vector box step against four scalar box tests and the portable lanes, bit for bit:
+    /// boxes around points on the line and anywhere, of every size, on lines of every slope.
+    fn box_steps_agree<T: Real>() {
+        let v3 =
+            |x: f64, y: f64, z: f64| T::Vec3::new(T::from_f64(x), T::from_f64(y), T::from_f64(z));
+        let uv = |x: f64, y: f64| T::Vec2::new(T::from_f64(x), T::from_f64(y));
+        let prism = Prism::new(
+            [v3(0.0, 0.0, 0.0), v3(1.0, 0.0, 0.0), v3(0.0, 1.0, 0.0)],
+            [v3(0.0, 0.0, 1.0); 3],
+            [uv(0.0, 0.0), uv(1.0, 0.0), uv(0.0, 1.0)],
+        );
+        let triangle = TexelTriangle::new(&prism, T::from_i32(64), [false; 3]);
+        let mut r = unit_randoms(4646);
+        let t = |v: f64| T::from_f64(v);
+        let (mut cases, mut met, mut missed) = (0, 0, 0);
+        for _ in 0..20_000 {
+            let mut slope = || {
+                let m = (r() - 0.5) * 2.0;
+                if r() < 0.2 { m * 1e-9 } else { m }
+            };
+            let dir = [slope(), slope(), slope()];
+            let origin = [r() * 64.0, r() * 64.0, r() * 2.0 - 0.5];
+            let line = StraightLine {
+                origin: origin.map(t),
+                dir: dir.map(t),
+                inv: dir.map(|d| T::ONE / t(d)),
+                t0: (0.0, T::ZERO),
+                wide: (origin, dir),
+            };
+            let walk = Walk::new(line, &triangle, T::ZERO, T::INFINITY);
+            let Some(walk) = walk else { continue };
+            let (t_lo, t_hi) = walk.interval();
+            let mut boxes = |k: usize| -> ([T; 3], [T; 3]) {
+                let size = 10f64.powf(r() * 4.0 - 3.0);
+                let tau = t_lo.to_f64() + r() * (t_hi.to_f64() - t_lo.to_f64()).min(100.0);
+                let centre: [f64; 3] = core::array::from_fn(|a| {
+                    if k == 3 {
+                        r() * 64.0
+                    } else {
+                        origin[a] + tau * dir[a] + (r() - 0.5) * size
+                    }
+                });
+                let lo = centre.map(|c| t(c - size * r()));
+                let hi = centre.map(|c| t(c + size * r()));
+                (lo, hi)
+            };
+            let four: [([T; 3], [T; 3]); 4] = core::array::from_fn(&mut boxes);
+            let lo = core::array::from_fn(|a| core::array::from_fn(|k| four[k].0[a]));
+            let hi = core::array::from_fn(|a| core::array::from_fn(|k| four[k].1[a]));
+            let scalar = walk.four_box_intervals_scalar(lo, hi, t_lo, t_hi);
+            let bits = |(a, b, m): ([T; 4], [T; 4], u8)| (a.map(T::to_bits), b.map(T::to_bits), m);
+            assert_eq!(
+                bits(walk.four_box_intervals(lo, hi, t_lo, t_hi)),
+                bits(scalar)
+            );
+            if walk.line.inv.iter().all(|v| v.is_finite()) {
+                let native = walk.four_box_intervals_in::<T::Four>(lo, hi, t_lo, t_hi);
+                let portable = walk.four_box_intervals_in::<Portable4<T>>(lo, hi, t_lo, t_hi);
+                assert_eq!(bits(native), bits(scalar), "{line:?}");
+                assert_eq!(bits(portable), bits(scalar), "{line:?}");
+                cases += 1;
+                met += scalar.2.count_ones();
+                missed += 4 - scalar.2.count_ones();
+            }
+        }
+        assert!(
+            cases > 5_000 && met > 5_000 && missed > 5_000,
+            "{cases} {met} {missed}"
+        );
+    }
+
+    #[test]
+    fn the_vector_box_step_is_the_scalar_one() {
+        box_steps_agree::<f32>();
+        box_steps_agree::<f64>();
     }
 
     #[test]
