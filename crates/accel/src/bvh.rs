@@ -4,7 +4,7 @@
 //! reference.
 
 use alloc::vec::Vec;
-use nlrt_poly::{Real, Vector3};
+use nlrt_poly::{LaneMask, Lanes4, Real, Vector3};
 
 use crate::stack::SpillStack;
 
@@ -110,6 +110,53 @@ impl<T: Real> SlabRay<T> {
         }
         (t0 <= t1).then_some(t0)
     }
+
+    /// [`SlabRay::entry`] of the four child boxes of `node` in one vector step
+    /// ([`Real::Four`]): each entry distance and, as bit `c` of the mask, whether box `c`
+    /// is entered (unused slots give garbage: mask them with [`Node4::used`]). The same
+    /// decisions and entry values as four calls of `entry` (tested; a zero's sign may
+    /// differ). Where a reciprocal direction is infinite or 0 (a slab is then a NaN
+    /// product, which `entry` resolves with `Real::min`/`max`), it makes those calls.
+    #[must_use]
+    #[inline]
+    pub fn entries(&self, node: &Node4<T>, t_min: T, t_max: T) -> ([T; ARITY], u8) {
+        if self.inv_dir.iter().all(|v| v.is_finite() && *v != T::ZERO) {
+            return self.entries_in::<T::Four>(node, t_min, t_max);
+        }
+        self.entries_scalar(node, t_min, t_max)
+    }
+
+    /// [`SlabRay::entries`] one box at a time: the reference of the vector step.
+    fn entries_scalar(&self, node: &Node4<T>, t_min: T, t_max: T) -> ([T; ARITY], u8) {
+        let (mut entries, mut met) = ([T::ZERO; ARITY], 0);
+        for (c, entry) in entries.iter_mut().enumerate() {
+            let b = node.bounds(c);
+            if let Some(t) = self.entry(b.lo, b.hi, t_min, t_max) {
+                *entry = t;
+                met |= 1 << c;
+            }
+        }
+        (entries, met)
+    }
+
+    /// [`SlabRay::entries`] in lanes `L` for finite, nonzero reciprocals: a used slot's
+    /// slab ends are then never NaN, so the lanes' `lesser`/`greater` pick what `entry`'s
+    /// swap and `Real::min`/`max` pick (up to the sign of a zero).
+    #[inline(always)]
+    fn entries_in<L: Lanes4<T>>(&self, node: &Node4<T>, t_min: T, t_max: T) -> ([T; ARITY], u8) {
+        let three_u = T::THREE * T::UNIT_ROUNDOFF;
+        let widen = L::splat(T::ONE + T::TWO * (three_u / (T::ONE - three_u)));
+        let mut t0 = L::splat(t_min);
+        let mut t1 = L::splat(t_max);
+        for i in 0..3 {
+            let (o, inv) = (L::splat(self.origin[i]), L::splat(self.inv_dir[i]));
+            let a = (L::from_array(node.lo[i]) - o) * inv;
+            let b = (L::from_array(node.hi[i]) - o) * inv;
+            t0 = a.lesser(b).greater(t0);
+            t1 = (a.greater(b) * widen).lesser(t1);
+        }
+        (t0.to_array(), t0.le(t1).bits())
+    }
 }
 
 /// Children per node.
@@ -118,11 +165,15 @@ pub const ARITY: usize = 4;
 const EMPTY_CHILD: u32 = u32::MAX;
 
 /// A node: up to four children, each an inner node (`count == 0`, `index` = node) or a leaf
-/// (`count > 0` primitives at `index` in the primitive order).
+/// (`count > 0` primitives at `index` in the primitive order). The children's boxes are
+/// stored by axis, the four children side by side (`lo[axis][child]`), so that one vector
+/// step tests all four ([`SlabRay::entries`]); an unused slot holds the empty box.
 #[derive(Clone, Copy, Debug)]
 pub struct Node4<T> {
-    /// Child boxes.
-    pub bounds: [Aabb<T>; ARITY],
+    /// Lower corners of the child boxes, by axis.
+    pub lo: [[T; ARITY]; 3],
+    /// Upper corners of the child boxes, by axis.
+    pub hi: [[T; ARITY]; 3],
     /// Node index or first primitive.
     pub index: [u32; ARITY],
     /// 0 for an inner node, else the primitive count.
@@ -130,11 +181,48 @@ pub struct Node4<T> {
 }
 
 impl<T: Real> Node4<T> {
+    /// A node with every slot unused.
+    const UNUSED: Self = Self {
+        lo: [[T::INFINITY; ARITY]; 3],
+        hi: [[T::NEG_INFINITY; ARITY]; 3],
+        index: [EMPTY_CHILD; ARITY],
+        count: [0; ARITY],
+    };
+
+    /// The box of child `slot`.
+    #[must_use]
+    #[inline]
+    pub fn bounds(&self, slot: usize) -> Aabb<T> {
+        Aabb {
+            lo: core::array::from_fn(|a| self.lo[a][slot]),
+            hi: core::array::from_fn(|a| self.hi[a][slot]),
+        }
+    }
+
+    /// Sets the box of child `slot`.
+    fn set_bounds(&mut self, slot: usize, b: Aabb<T>) {
+        for a in 0..3 {
+            self.lo[a][slot] = b.lo[a];
+            self.hi[a][slot] = b.hi[a];
+        }
+    }
+
+    /// The used slots as bits (bit `c` slot `c`).
+    #[must_use]
+    #[inline]
+    pub fn used(&self) -> u8 {
+        let mut bits = 0;
+        for c in 0..ARITY {
+            bits |= u8::from(self.index[c] != EMPTY_CHILD) << c;
+        }
+        bits
+    }
+
     /// The union of the used children's boxes.
     fn union_of_children(&self) -> Aabb<T> {
         (0..ARITY)
             .filter(|&c| self.index[c] != EMPTY_CHILD)
-            .fold(Aabb::EMPTY, |b, c| b.union(&self.bounds[c]))
+            .fold(Aabb::EMPTY, |b, c| b.union(&self.bounds(c)))
     }
 }
 
@@ -553,7 +641,7 @@ impl<T: Real> Bvh4<T> {
                 } else {
                     self.nodes[index].union_of_children()
                 };
-                self.nodes[n].bounds[slot] = bounds;
+                self.nodes[n].set_bounds(slot, bounds);
             }
         }
         self.root_bounds = self.nodes[0].union_of_children();
@@ -619,7 +707,7 @@ impl<T: Real> Bvh4<T> {
                 } else {
                     node_tests(&self.nodes[node.index[slot] as usize])
                 };
-                cost += reach(&node.bounds[slot]) / root * tests;
+                cost += reach(&node.bounds(slot)) / root * tests;
             }
         }
         cost
@@ -648,12 +736,9 @@ impl<T: Real> Bvh4<T> {
             let node = &self.nodes[node as usize];
             let mut order: [(T, usize); ARITY] = [(T::ZERO, 0); ARITY];
             let mut n = 0;
-            for c in 0..ARITY {
-                if node.index[c] == EMPTY_CHILD {
-                    continue;
-                }
-                let b = &node.bounds[c];
-                if let Some(t) = ray.entry(b.lo, b.hi, t_min, t_max) {
+            let (entries, met) = ray.entries(node, t_min, t_max);
+            for (c, &t) in entries.iter().enumerate() {
+                if (met & node.used()) >> c & 1 == 1 {
                     // Insertion sort, nearest first.
                     let mut k = n;
                     while k > 0 && order[k - 1].0 > t {
@@ -696,11 +781,7 @@ fn collapse<T: Real>(
     nodes: &mut Vec<Node4<T>>,
 ) -> u32 {
     let me = nodes.len();
-    nodes.push(Node4 {
-        bounds: [Aabb::EMPTY; ARITY],
-        index: [EMPTY_CHILD; ARITY],
-        count: [0; ARITY],
-    });
+    nodes.push(Node4::UNUSED);
     // Children: open the binary children, then open inner grandchildren while room remains.
     let (mut kids, mut n) = ([0usize; ARITY], 1);
     match &binary[b] {
@@ -736,12 +817,12 @@ fn collapse<T: Real>(
     }
     for (slot, &k) in kids[..n].iter().enumerate() {
         if let Some((bounds, first, count)) = binary[k].as_leaf(leaf_at) {
-            nodes[me].bounds[slot] = bounds;
+            nodes[me].set_bounds(slot, bounds);
             nodes[me].index[slot] = first;
             nodes[me].count[slot] = count;
         } else if let Binary::Inner { bounds, .. } = &binary[k] {
             let child = collapse(binary, k, leaf_at, nodes);
-            nodes[me].bounds[slot] = *bounds;
+            nodes[me].set_bounds(slot, *bounds);
             nodes[me].index[slot] = child;
             nodes[me].count[slot] = 0;
         }
@@ -843,6 +924,77 @@ mod tests {
         }
     }
 
+    /// The vector slab step against four scalar slab tests and the portable lanes, on every
+    /// node of a tree, for rays of every slope (near-axis ones included) from inside and
+    /// outside the boxes, some from a box's face: the same decisions and entries.
+    fn slab_steps_agree<T: Real>() {
+        let mut r = crate::test_util::unit_randoms(4647);
+        let v =
+            |x: f64, y: f64, z: f64| T::Vec3::new(T::from_f64(x), T::from_f64(y), T::from_f64(z));
+        let bs: Vec<Aabb<T>> = (0..300)
+            .map(|_| {
+                let c = [r() * 10.0, r() * 10.0, r() * 10.0];
+                let e = [r() * 0.5, r() * 0.5, r() * 0.5];
+                Aabb::of_points([
+                    v(c[0] - e[0], c[1] - e[1], c[2] - e[2]),
+                    v(c[0] + e[0], c[1] + e[1], c[2] + e[2]),
+                ])
+            })
+            .collect();
+        let bvh = Bvh4::build(&bs, 2);
+        let (mut cases, mut met, mut missed) = (0, 0, 0);
+        for i in 0..400 {
+            let mut slope = || {
+                let m = r() - 0.5;
+                if r() < 0.2 { m * 1e-9 } else { m }
+            };
+            let d = v(slope(), slope(), slope());
+            // Every fourth ray starts on a box's lower face.
+            let o = if i % 4 == 0 {
+                let b = &bs[i % bs.len()];
+                T::Vec3::new(b.lo[0], b.centre(1), b.centre(2))
+            } else {
+                v(r() * 14.0 - 2.0, r() * 14.0 - 2.0, r() * 14.0 - 2.0)
+            };
+            let ray = SlabRay::new(o, d);
+            let t_max = if i % 3 == 0 {
+                T::INFINITY
+            } else {
+                T::from_f64(r() * 10.0)
+            };
+            for node in bvh.nodes() {
+                let scalar = ray.entries_scalar(node, T::ZERO, t_max);
+                let used = node.used();
+                let same = |(e, m): ([T; ARITY], u8)| {
+                    m & used == scalar.1 & used
+                        && (0..ARITY).all(|c| (m & used) >> c & 1 == 0 || e[c] == scalar.0[c])
+                };
+                assert!(same(ray.entries(node, T::ZERO, t_max)));
+                if ray.inv_dir.iter().all(|v| v.is_finite() && *v != T::ZERO) {
+                    assert!(same(ray.entries_in::<T::Four>(node, T::ZERO, t_max)));
+                    assert!(same(ray.entries_in::<nlrt_poly::lanes4::Portable4<T>>(
+                        node,
+                        T::ZERO,
+                        t_max
+                    )));
+                    cases += 1;
+                    met += (scalar.1 & used).count_ones();
+                    missed += (!scalar.1 & used).count_ones();
+                }
+            }
+        }
+        assert!(
+            cases > 10_000 && met > 1_000 && missed > 10_000,
+            "{cases} {met} {missed}"
+        );
+    }
+
+    #[test]
+    fn the_vector_slab_step_is_the_scalar_one() {
+        slab_steps_agree::<f32>();
+        slab_steps_agree::<f64>();
+    }
+
     /// Every used slot's box holds what is below it: its primitives' boxes, or its child
     /// node's slots.
     fn assert_boxes_hold_their_children(bvh: &Bvh4<f64>, bs: &[Aabb<f64>]) {
@@ -854,12 +1006,12 @@ mod tests {
                 let (index, count) = (node.index[slot] as usize, node.count[slot] as usize);
                 if count > 0 {
                     for &p in &bvh.primitive_order()[index..index + count] {
-                        assert!(holds(&node.bounds[slot], &bs[p as usize]));
+                        assert!(holds(&node.bounds(slot), &bs[p as usize]));
                     }
                 } else {
                     let child = &bvh.nodes()[index];
                     for c in (0..ARITY).filter(|&c| Bvh4::is_used(child, c)) {
-                        assert!(holds(&node.bounds[slot], &child.bounds[c]));
+                        assert!(holds(&node.bounds(slot), &child.bounds(c)));
                     }
                 }
             }
@@ -873,7 +1025,7 @@ mod tests {
         let mut refitted = built.clone();
         assert!(refitted.refit(&bs));
         for (a, b) in built.nodes().iter().zip(refitted.nodes()) {
-            assert_eq!(a.bounds, b.bounds);
+            assert_eq!((a.lo, a.hi), (b.lo, b.hi));
         }
         assert_eq!(built.sah_cost(), refitted.sah_cost());
         // Move every box (a shear and a wave): the refitted tree's boxes hold the new boxes,
@@ -956,7 +1108,7 @@ mod tests {
                     let mut set: Vec<u32> = t.primitive_order()[index..index + count].to_vec();
                     set.sort_unstable();
                     out.push((
-                        node.bounds[slot],
+                        node.bounds(slot),
                         if count > 0 {
                             set
                         } else {
@@ -988,11 +1140,11 @@ mod tests {
         let mut bs = boxes(20);
         let mut bvh = Bvh4::build(&bs, 1);
         assert!(!bvh.refit(&bs[..19]), "another primitive count");
-        let before = bvh.nodes()[0].bounds;
+        let before = (bvh.nodes()[0].lo, bvh.nodes()[0].hi);
         bs[4].hi[1] = f64::INFINITY;
         assert!(!bvh.refit(&bs), "a box in the tree is no longer finite");
         assert_eq!(
-            bvh.nodes()[0].bounds,
+            (bvh.nodes()[0].lo, bvh.nodes()[0].hi),
             before,
             "a refused refit changes nothing"
         );

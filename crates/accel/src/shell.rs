@@ -418,7 +418,7 @@ impl<T: Real> ShellSurface<T> {
                 if !Bvh4::is_used(node, c) {
                     continue;
                 }
-                let b = &node.bounds[c];
+                let b = node.bounds(c);
                 stats.box_tests += 1;
                 // Shifted in `T`, as the triangles are placed, so each box holds its
                 // triangles' placed vertices (rounding is monotonic), then widened.
@@ -583,7 +583,7 @@ impl<T: Real> ShellSurface<T> {
                     continue;
                 }
                 used |= 1 << c;
-                let b = &node.bounds[c];
+                let b = node.bounds(c);
                 let w = T::to_f64;
                 [lo[0][c], lo[1][c], lo[2][c]] = [w(b.lo[0] + dx), w(b.lo[1] + dy), w(b.lo[2])];
                 [hi[0][c], hi[1][c], hi[2][c]] = [w(b.hi[0] + dx), w(b.hi[1] + dy), w(b.hi[2])];
