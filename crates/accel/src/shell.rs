@@ -412,19 +412,38 @@ impl<T: Real> ShellSurface<T> {
                 continue;
             }
             let node = &nodes[node as usize];
+            // The four children's boxes: shifted in `T`, as the triangles are placed, so each
+            // box holds its triangles' placed vertices (rounding is monotonic), then widened;
+            // heights cut to the tile's.
+            let w = |v: T| C::from_f64(v.to_f64());
+            let boxes: [([C; 3], [C; 3]); 4] = core::array::from_fn(|c| {
+                let b = node.bounds(c);
+                (
+                    [w(b.lo[0] + dx), w(b.lo[1] + dy), w(b.lo[2]).max(h_in)],
+                    [w(b.hi[0] + dx), w(b.hi[1] + dy), w(b.hi[2]).min(h_out)],
+                )
+            });
+            // Their uv enclosures in one vector step (an unused slot or an empty height
+            // range takes the tile's bottom, a finite interval whose enclosure is not used).
+            let heights = |c: usize, end: usize| {
+                let (lo, hi) = (boxes[c].0[2], boxes[c].1[2]);
+                if Bvh4::is_used(node, c) && lo <= hi {
+                    [lo, hi][end]
+                } else {
+                    h_in
+                }
+            };
+            let enclosures = curve.uv_enclosures(
+                core::array::from_fn(|c| heights(c, 0)),
+                core::array::from_fn(|c| heights(c, 1)),
+            );
             let mut found: [(C, usize, Option<[C; 4]>); 4] = [(C::ZERO, 0, None); 4];
             let mut n = 0;
-            for c in 0..4 {
+            for (c, &(lo, hi)) in boxes.iter().enumerate() {
                 if !Bvh4::is_used(node, c) {
                     continue;
                 }
-                let b = node.bounds(c);
                 stats.box_tests += 1;
-                // Shifted in `T`, as the triangles are placed, so each box holds its
-                // triangles' placed vertices (rounding is monotonic), then widened.
-                let w = |v: T| C::from_f64(v.to_f64());
-                let lo = [w(b.lo[0] + dx), w(b.lo[1] + dy), w(b.lo[2]).max(h_in)];
-                let hi = [w(b.hi[0] + dx), w(b.hi[1] + dy), w(b.hi[2]).min(h_out)];
                 if let Some([u_lo, u_hi, v_lo, v_hi]) = node_enclosure
                     && (u_hi < lo[0] || u_lo > hi[0] || v_hi < lo[1] || v_lo > hi[1])
                 {
@@ -433,7 +452,7 @@ impl<T: Real> ShellSurface<T> {
                 if !(lo[2] <= hi[2]) {
                     continue;
                 }
-                let enclosure = curve.uv_enclosure(lo[2], hi[2]);
+                let enclosure = enclosures[c];
                 if let Some(span) = curve.box_span_in(enclosure, lo, hi, t_min, *t_max) {
                     let mut i = n;
                     while i > 0 && found[i - 1].0 > span.t_in {

@@ -7,11 +7,16 @@
 
 use crate::Real;
 use crate::lanes::LaneMask;
-use core::ops::{Add, BitAnd, BitOr, Mul, Not, Sub};
+use core::ops::{Add, BitAnd, BitOr, Div, Mul, Neg, Not, Sub};
 
 /// Four lanes of `T` with the operations of the walks' child steps (IEEE semantics per lane).
 pub trait Lanes4<T: Real>:
-    Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = Self>
+    Copy
+    + Add<Output = Self>
+    + Sub<Output = Self>
+    + Mul<Output = Self>
+    + Div<Output = Self>
+    + Neg<Output = Self>
 {
     /// The comparison result (bit `i` of [`LaneMask::bits`] is lane `i`).
     type Mask: LaneMask;
@@ -23,6 +28,8 @@ pub trait Lanes4<T: Real>:
     fn to_array(self) -> [T; 4];
     /// `self * a + b`, one rounding.
     fn mul_add(self, a: Self, b: Self) -> Self;
+    /// `|self|`
+    fn abs(self) -> Self;
     /// `self` where `self < o`, else `o` (the second operand when either is NaN: the
     /// semantics of `minps`, and of `if a < b { a } else { b }`).
     fn lesser(self, o: Self) -> Self;
@@ -32,6 +39,8 @@ pub trait Lanes4<T: Real>:
     fn le(self, o: Self) -> Self::Mask;
     /// `self >= o`, false on NaN.
     fn ge(self, o: Self) -> Self::Mask;
+    /// `self > o`, false on NaN.
+    fn gt(self, o: Self) -> Self::Mask;
 }
 
 /// Four scalars: the reference implementation of [`Lanes4`], and the one used without AVX2.
@@ -84,6 +93,15 @@ macro_rules! portable_binary {
 portable_binary!(Add, add, +);
 portable_binary!(Sub, sub, -);
 portable_binary!(Mul, mul, *);
+portable_binary!(Div, div, /);
+
+impl<T: Real> Neg for Portable4<T> {
+    type Output = Self;
+    #[inline(always)]
+    fn neg(self) -> Self {
+        Self(self.0.map(|v| -v))
+    }
+}
 
 impl<T: Real> Portable4<T> {
     #[inline(always)]
@@ -115,6 +133,10 @@ impl<T: Real> Lanes4<T> for Portable4<T> {
         Self(core::array::from_fn(|i| self.0[i].mul_add(a.0[i], b.0[i])))
     }
     #[inline(always)]
+    fn abs(self) -> Self {
+        Self(self.0.map(T::abs))
+    }
+    #[inline(always)]
     fn lesser(self, o: Self) -> Self {
         Self(core::array::from_fn(|i| {
             if self.0[i] < o.0[i] {
@@ -142,6 +164,10 @@ impl<T: Real> Lanes4<T> for Portable4<T> {
     fn ge(self, o: Self) -> Portable4Mask {
         self.compare(o, |a, b| a >= b)
     }
+    #[inline(always)]
+    fn gt(self, o: Self) -> Portable4Mask {
+        self.compare(o, |a, b| a > b)
+    }
 }
 
 #[cfg(all(
@@ -163,7 +189,7 @@ mod avx2 {
     //! and `__m256d`, which have the same size and no invalid bit patterns.
     use super::{LaneMask, Lanes4};
     use core::arch::x86_64::*;
-    use core::ops::{Add, BitAnd, BitOr, Mul, Not, Sub};
+    use core::ops::{Add, BitAnd, BitOr, Div, Mul, Neg, Not, Sub};
 
     /// Four `f32` lanes in one SSE register.
     #[derive(Clone, Copy, Debug)]
@@ -243,9 +269,26 @@ mod avx2 {
     binary!(F32x4, Add, add, _mm_add_ps);
     binary!(F32x4, Sub, sub, _mm_sub_ps);
     binary!(F32x4, Mul, mul, _mm_mul_ps);
+    binary!(F32x4, Div, div, _mm_div_ps);
     binary!(F64x4, Add, add, _mm256_add_pd);
     binary!(F64x4, Sub, sub, _mm256_sub_pd);
     binary!(F64x4, Mul, mul, _mm256_mul_pd);
+    binary!(F64x4, Div, div, _mm256_div_pd);
+
+    impl Neg for F32x4 {
+        type Output = Self;
+        #[inline(always)]
+        fn neg(self) -> Self {
+            Self(unsafe { _mm_xor_ps(self.0, _mm_set1_ps(-0.0)) })
+        }
+    }
+    impl Neg for F64x4 {
+        type Output = Self;
+        #[inline(always)]
+        fn neg(self) -> Self {
+            Self(unsafe { _mm256_xor_pd(self.0, _mm256_set1_pd(-0.0)) })
+        }
+    }
 
     impl Lanes4<f32> for F32x4 {
         type Mask = Mask4;
@@ -266,6 +309,10 @@ mod avx2 {
             Self(unsafe { _mm_fmadd_ps(self.0, a.0, b.0) })
         }
         #[inline(always)]
+        fn abs(self) -> Self {
+            Self(unsafe { _mm_andnot_ps(_mm_set1_ps(-0.0), self.0) })
+        }
+        #[inline(always)]
         fn lesser(self, o: Self) -> Self {
             // `minps a, b` is `a < b ? a : b`.
             Self(unsafe { _mm_min_ps(self.0, o.0) })
@@ -282,6 +329,10 @@ mod avx2 {
         #[inline(always)]
         fn ge(self, o: Self) -> Mask4 {
             Mask4(unsafe { _mm_cmp_ps::<_CMP_GE_OQ>(self.0, o.0) })
+        }
+        #[inline(always)]
+        fn gt(self, o: Self) -> Mask4 {
+            Mask4(unsafe { _mm_cmp_ps::<_CMP_GT_OQ>(self.0, o.0) })
         }
     }
 
@@ -304,6 +355,10 @@ mod avx2 {
             Self(unsafe { _mm256_fmadd_pd(self.0, a.0, b.0) })
         }
         #[inline(always)]
+        fn abs(self) -> Self {
+            Self(unsafe { _mm256_andnot_pd(_mm256_set1_pd(-0.0), self.0) })
+        }
+        #[inline(always)]
         fn lesser(self, o: Self) -> Self {
             Self(unsafe { _mm256_min_pd(self.0, o.0) })
         }
@@ -318,6 +373,10 @@ mod avx2 {
         #[inline(always)]
         fn ge(self, o: Self) -> Mask4d {
             Mask4d(unsafe { _mm256_cmp_pd::<_CMP_GE_OQ>(self.0, o.0) })
+        }
+        #[inline(always)]
+        fn gt(self, o: Self) -> Mask4d {
+            Mask4d(unsafe { _mm256_cmp_pd::<_CMP_GT_OQ>(self.0, o.0) })
         }
     }
 }
@@ -409,6 +468,10 @@ mod tests {
                 assert!(same((la + lb).to_array(), (pa + pb).to_array()));
                 assert!(same((la - lb).to_array(), (pa - pb).to_array()));
                 assert!(same((la * lb).to_array(), (pa * pb).to_array()));
+                assert!(same((la / lb).to_array(), (pa / pb).to_array()));
+                assert!(same((-la).to_array(), (-pa).to_array()));
+                assert!(same(la.abs().to_array(), pa.abs().to_array()));
+                assert_eq!(la.gt(lb).bits(), pa.gt(pb).bits());
                 assert!(same(
                     la.mul_add(lb, lc).to_array(),
                     pa.mul_add(pb, pc).to_array()
