@@ -234,8 +234,8 @@ pub(crate) const CURVE_STACK: usize = 48;
 /// they can cull: once a hit has set a finite `t_max`, or for stretches that began before
 /// `t_min`, a stretch is skipped when the distances at its ends are both beyond `t_max` or
 /// both before `t_min` (as in the box test, exact where the shell does not fold, a sample
-/// where it does). Cells whose square misses the triangle's uv triangle `uv_tri` (in cell
-/// units) are skipped; `leaf(x, y, h, t_max, stats)` tests a cell and returns the distance of
+/// where it does). Cells whose square misses the triangle's uv triangle (`walk.uv_tri`, in
+/// cell units) are skipped; `leaf(x, y, h, t_max, stats)` tests a cell and returns the distance of
 /// a hit nearer than `t_max`; `h` holds every height within the cell's height bounds at
 /// which this piece of the curve is in the cell and in the prism, rounding windows included
 /// (a cell met by several pieces is called once per piece).
@@ -244,75 +244,161 @@ pub(crate) const CURVE_STACK: usize = 48;
 /// possible for curves running within rounding of many split lines at once): the caller then
 /// finishes the triangle with [`traverse_cells`], whose answer does not depend on what the
 /// leaves saw so far.
-#[allow(clippy::too_many_arguments)]
+///
+/// One flat loop over the stack of stretches; the steps it takes are [`CurveWalk`]'s:
+/// `push_roots` (the virtual root), `beyond` (the distance cull), `whole_descent` (the
+/// roots' level skip) and `split` (a node's stretch cut among its children).
 pub(crate) fn traverse_curve_cells<T: Real>(
     stack: &mut [Stretch<T>],
-    root: RootNodes,
+    walk: &CurveWalk<'_, '_, T, impl Fn(u32, i32, i32) -> [T; 2]>,
     root_heights: [T; 2],
-    curve: &TextureCurve<'_, T>,
-    edges: &BaseEdges<T>,
-    cells: CellSize<T>,
-    uv_tri: &CellTriangle<T>,
     t_min: T,
-    t_max: &mut T,
+    t_best: &mut T,
     stats: &mut TraversalStats,
-    node_heights: impl Fn(u32, i32, i32) -> [T; 2],
     mut leaf: impl FnMut(i32, i32, [T; 2], T, &mut TraversalStats) -> Option<T>,
 ) -> bool {
-    let empty = Stretch::empty();
-    let mut depth = 0;
-    let cell = |c: i64| cells.line(c);
-    // Whether node (level, x, y) is in the root's texel range and may meet the uv triangle.
-    let wanted = |level: u32, x: i32, y: i32| {
+    let Some(mut depth) = walk.push_roots(stack, root_heights, t_min, *t_best, stats) else {
+        return false;
+    };
+    let mut found = [Stretch::empty(); STRETCHES_PER_NODE];
+    while depth > 0 {
+        depth -= 1;
+        let node = stack[depth];
+        if walk.beyond(&node, t_min, *t_best) {
+            continue;
+        }
+        if node.level == 0 {
+            if let Some(t) = leaf(node.x, node.y, node.h, *t_best, stats) {
+                *t_best = t;
+            }
+            continue;
+        }
+        if node.level == walk.root.level
+            && let Some(deepest) = walk.whole_descent(&node)
+        {
+            // The stretch goes down whole: the walk would hand it to one child per level,
+            // clipped to each level's height bounds, of which the innermost are kept here.
+            if let Some(child) = walk.clipped(deepest, node.h, &node, stats) {
+                stack[depth] = child;
+                depth += 1;
+            }
+            continue;
+        }
+        let level = node.level - 1;
+        let (x, y) = (node.x * 2, node.y * 2);
+        let half = 1i64 << level;
+        let lines = [
+            Some(walk.cells.line(i64::from(x + 1) * half)),
+            Some(walk.cells.line(i64::from(y + 1) * half)),
+        ];
+        let mut n = 0;
+        if !walk.split(&node, lines, (level, x, y), &mut found, &mut n, stats)
+            || depth + n > stack.len()
+        {
+            return false;
+        }
+        for s in found[..n].iter().rev() {
+            stack[depth] = *s;
+            depth += 1;
+        }
+    }
+    true
+}
+
+/// What every step of the curved walk of one base triangle reads: the roots, the ray's
+/// texture-space curve and its base edges, the cells, the triangle's uv triangle in cell
+/// units, and the height bounds of a node's content (`node_heights(level, x, y)`).
+/// [`traverse_curve_cells`] walks it.
+pub(crate) struct CurveWalk<'a, 'c, T: Real, N> {
+    pub(crate) root: RootNodes,
+    pub(crate) curve: &'a TextureCurve<'c, T>,
+    pub(crate) edges: &'a BaseEdges<T>,
+    pub(crate) cells: CellSize<T>,
+    pub(crate) uv_tri: &'a CellTriangle<T>,
+    pub(crate) node_heights: N,
+}
+
+impl<T: Real, N: Fn(u32, i32, i32) -> [T; 2]> CurveWalk<'_, '_, T, N> {
+    /// Whether node `(level, x, y)` is in the root's texel range and may meet the uv
+    /// triangle.
+    #[inline(always)]
+    fn wanted(&self, level: u32, x: i32, y: i32) -> bool {
         let k = 1i64 << level;
         let (cx0, cy0) = (i64::from(x) * k, i64::from(y) * k);
-        let [r0, r1, r2, r3] = root.texels.map(i64::from);
+        let [r0, r1, r2, r3] = self.root.texels.map(i64::from);
         if cx0 > r2 || cy0 > r3 || cx0 + k <= r0 || cy0 + k <= r1 {
             return false;
         }
         let lo = [T::from_f64(cx0 as f64), T::from_f64(cy0 as f64)];
         let hi = [T::from_f64((cx0 + k) as f64), T::from_f64((cy0 + k) as f64)];
-        uv_tri.meets_square(lo, hi)
-    };
-    // Sorted insertion, nearest first (few entries); false when full. A piece for a child
-    // that already has one from the same stretch is merged into it (the hull of their
-    // heights: a superset, which the leaf test allows). Without the merge a curve within
-    // rounding of the split lines at every level (a ray grazing a long texel row, whose uv
-    // errors are then large) sends two pieces to each child per level, and their number
-    // doubles with depth; with it a node holds one stretch per stretch of its parent, so a
-    // walk visits each node at most once per root stretch.
-    let insert = |found: &mut [Stretch<T>], n: &mut usize, s: Stretch<T>| -> bool {
-        let mut s = s;
-        if let Some(j) = found[..*n]
-            .iter()
-            .position(|f| (f.level, f.x, f.y) == (s.level, s.x, s.y))
-        {
-            s.h = [found[j].h[0].min(s.h[0]), found[j].h[1].max(s.h[1])];
-            found.copy_within(j + 1..*n, j);
-            *n -= 1;
+        self.uv_tri.meets_square(lo, hi)
+    }
+
+    /// `stretch` handed to node `(level, x, y)` with its heights `[h0, h1]` clipped to the
+    /// node's height bounds; `None` where the node is not wanted or the clip is empty.
+    #[inline(always)]
+    fn clipped(
+        &self,
+        (level, x, y): (u32, i32, i32),
+        [h0, h1]: [T; 2],
+        stretch: &Stretch<T>,
+        stats: &mut TraversalStats,
+    ) -> Option<Stretch<T>> {
+        if !self.wanted(level, x, y) {
+            return None;
         }
-        if *n == found.len() {
-            return false;
-        }
-        let mut i = *n;
-        while i > 0 && found[i - 1].order() > s.order() {
-            found[i] = found[i - 1];
-            i -= 1;
-        }
-        found[i] = s;
-        *n += 1;
-        true
-    };
-    // Cuts `stretch` (heights `[a, b]`) at the crossings of the split lines (`None`: no line
-    // on that axis) and hands each piece to its child at `level`, `(x + qx, y + qy)`, clipped
-    // to the child's height bounds, nearest first into `found`; false when `found` is full.
-    let split = |stretch: &Stretch<T>,
-                 lines: [Option<T>; 2],
-                 (level, x, y): (u32, i32, i32),
-                 found: &mut [Stretch<T>],
-                 n: &mut usize,
-                 stats: &mut TraversalStats|
-     -> bool {
+        stats.box_tests += 1;
+        let [lo, hi] = (self.node_heights)(level, x, y);
+        let h = [h0.max(lo), h1.min(hi)];
+        (h[0] <= h[1]).then_some(Stretch {
+            level,
+            x,
+            y,
+            h,
+            ..*stretch
+        })
+    }
+
+    /// Whether a stretch can be skipped by its distances (they are computed only when they
+    /// can cull: once a hit has set a finite `t_best`, or for a stretch that began before
+    /// `t_min`): both ends beyond `t_best` or both before `t_min`.
+    #[inline]
+    fn beyond(&self, node: &Stretch<T>, t_min: T, t_best: T) -> bool {
+        (t_best < T::INFINITY || node.check_t_min)
+            && matches!(
+                (self.curve.distance(node.h[0]), self.curve.distance(node.h[1])),
+                (Some(ta), Some(tb)) if ta.min(tb) > t_best || ta.max(tb) < t_min
+            )
+    }
+
+    /// Where a root's stretch goes down whole: the deepest node whose square holds the
+    /// curve's uv enclosure over the stretch's heights ([`deepest_holding`]); `None` where
+    /// there is none (no enclosure, or a split line of the root meets it) and the stretch is
+    /// split level by level.
+    #[inline]
+    fn whole_descent(&self, node: &Stretch<T>) -> Option<(u32, i32, i32)> {
+        let e = self
+            .curve
+            .uv_enclosure(node.h[0], node.h[1])
+            .filter(|e| e[0] <= e[1] && e[2] <= e[3])?;
+        deepest_holding(node.level, node.x, node.y, e, self.cells)
+    }
+
+    /// Cuts `stretch` (heights `[a, b]`) at the crossings of the split lines (`None`: no line
+    /// on that axis) and hands each piece to its child at `level`, `(x + qx, y + qy)`,
+    /// clipped to the child's height bounds, nearest first into `found`; false when `found`
+    /// is full.
+    #[inline]
+    fn split(
+        &self,
+        stretch: &Stretch<T>,
+        lines: [Option<T>; 2],
+        (level, x, y): (u32, i32, i32),
+        found: &mut [Stretch<T>],
+        n: &mut usize,
+        stats: &mut TraversalStats,
+    ) -> bool {
+        let curve = self.curve;
         let [a, b] = stretch.h;
         // The stretch's ends and its crossings of the split lines, each with its window, in
         // increasing order (each line's crossings are; a tie keeps axis 0's first).
@@ -354,49 +440,45 @@ pub(crate) fn traverse_curve_cells<T: Real>(
                     };
                 }
             }
-            let (lo_h, hi_h) = ((c0 - w0).max(a), (c1 + w1).min(b));
+            let h = [(c0 - w0).max(a), (c1 + w1).min(b)];
             for qy in sides[1][0]..=sides[1][1] {
                 for qx in sides[0][0]..=sides[0][1] {
-                    let (cx, cy) = (x + i32::from(qx), y + i32::from(qy));
-                    if !wanted(level, cx, cy) {
-                        continue;
-                    }
-                    stats.box_tests += 1;
-                    let [lo, hi] = node_heights(level, cx, cy);
-                    let (h0, h1) = (lo_h.max(lo), hi_h.min(hi));
-                    if !(h0 <= h1) {
-                        continue;
-                    }
-                    let child = Stretch {
-                        level,
-                        x: cx,
-                        y: cy,
-                        h: [h0, h1],
-                        ..*stretch
-                    };
-                    if !insert(found, n, child) {
+                    let child = (level, x + i32::from(qx), y + i32::from(qy));
+                    if let Some(child) = self.clipped(child, h, stretch, stats)
+                        && !insert(found, n, child)
+                    {
                         return false;
                     }
                 }
             }
         }
         true
-    };
-    {
-        // The ray inside the prism (the curve inside the base triangle, its ends widened as
-        // the texel test widens them) at the roots' heights, as stretches of a virtual node
-        // whose children are the roots, in order of entry distance.
-        let [h_lo, h_hi] = root_heights;
+    }
+
+    /// The ray inside the prism (the curve inside the base triangle, its ends widened as
+    /// the texel test widens them) at the roots' heights, as stretches of a virtual node
+    /// whose children are the roots, in order of entry distance, split among the roots and
+    /// pushed onto `stack`, nearest on top; the stack's depth, or `None` when a stack is
+    /// full.
+    fn push_roots(
+        &self,
+        stack: &mut [Stretch<T>],
+        [h_lo, h_hi]: [T; 2],
+        t_min: T,
+        t_max: T,
+        stats: &mut TraversalStats,
+    ) -> Option<usize> {
+        let empty = Stretch::empty();
         let mut roots = [(empty, T::ZERO); 4];
         let mut n = 0;
         let mut complete = true;
-        edges.stretches(h_lo, h_hi, |h_in, h_out| {
-            let (t0, t1) = (curve.distance(h_in), curve.distance(h_out));
+        self.edges.stretches(h_lo, h_hi, |h_in, h_out| {
+            let (t0, t1) = (self.curve.distance(h_in), self.curve.distance(h_out));
             let (t_lo, t_hi, ascending) = match (t0, t1) {
                 (Some(a), Some(b)) => (a.min(b), a.max(b), b >= a),
                 _ => (T::NEG_INFINITY, T::INFINITY, true),
             };
-            if t_hi < t_min || t_lo > *t_max {
+            if t_hi < t_min || t_lo > t_max {
                 return;
             }
             if n == roots.len() {
@@ -418,84 +500,61 @@ pub(crate) fn traverse_curve_cells<T: Real>(
             n += 1;
         });
         if !complete {
-            return false;
+            return None;
         }
+        let root = self.root;
         let k = 1i64 << root.level;
         let lines = [
-            (root.nx == 2).then(|| cell(i64::from(root.x + 1) * k)),
-            (root.ny == 2).then(|| cell(i64::from(root.y + 1) * k)),
+            (root.nx == 2).then(|| self.cells.line(i64::from(root.x + 1) * k)),
+            (root.ny == 2).then(|| self.cells.line(i64::from(root.y + 1) * k)),
         ];
+        let mut depth = 0;
         for (stretch, _) in roots[..n].iter().rev() {
             let mut found = [empty; STRETCHES_PER_NODE];
             let mut m = 0;
             let base = (root.level, root.x, root.y);
-            if !split(stretch, lines, base, &mut found, &mut m, stats) || depth + m > stack.len() {
-                return false;
+            if !self.split(stretch, lines, base, &mut found, &mut m, stats)
+                || depth + m > stack.len()
+            {
+                return None;
             }
             for s in found[..m].iter().rev() {
                 stack[depth] = *s;
                 depth += 1;
             }
         }
+        Some(depth)
     }
-    let mut found = [empty; STRETCHES_PER_NODE];
-    while depth > 0 {
-        depth -= 1;
-        let node = stack[depth];
-        if (*t_max < T::INFINITY || node.check_t_min)
-            && let (Some(ta), Some(tb)) = (curve.distance(node.h[0]), curve.distance(node.h[1]))
-            && (ta.min(tb) > *t_max || ta.max(tb) < t_min)
-        {
-            continue;
-        }
-        if node.level == 0 {
-            if let Some(t) = leaf(node.x, node.y, node.h, *t_max, stats) {
-                *t_max = t;
-            }
-            continue;
-        }
-        if node.level == root.level
-            && let Some((level, x, y)) = curve
-                .uv_enclosure(node.h[0], node.h[1])
-                .filter(|e| e[0] <= e[1] && e[2] <= e[3])
-                .and_then(|e| deepest_holding(node.level, node.x, node.y, e, cells))
-        {
-            // The stretch goes down whole: the walk would hand it to one child per level,
-            // clipped to each level's height bounds, of which the innermost are kept here.
-            if wanted(level, x, y) {
-                stats.box_tests += 1;
-                let [lo, hi] = node_heights(level, x, y);
-                let h = [node.h[0].max(lo), node.h[1].min(hi)];
-                if h[0] <= h[1] {
-                    stack[depth] = Stretch {
-                        level,
-                        x,
-                        y,
-                        h,
-                        ..node
-                    };
-                    depth += 1;
-                }
-            }
-            continue;
-        }
-        let level = node.level - 1;
-        let (x, y) = (node.x * 2, node.y * 2);
-        let half = 1i64 << level;
-        let lines = [
-            Some(cell(i64::from(x + 1) * half)),
-            Some(cell(i64::from(y + 1) * half)),
-        ];
-        let mut n = 0;
-        if !split(&node, lines, (level, x, y), &mut found, &mut n, stats) || depth + n > stack.len()
-        {
-            return false;
-        }
-        for s in found[..n].iter().rev() {
-            stack[depth] = *s;
-            depth += 1;
-        }
+}
+
+/// Sorted insertion into `found[..n]`, nearest first (few entries); false when full. A piece
+/// for a child that already has one from the same stretch is merged into it (the hull of
+/// their heights: a superset, which the leaf test allows). Without the merge a curve within
+/// rounding of the split lines at every level (a ray grazing a long texel row, whose uv
+/// errors are then large) sends two pieces to each child per level, and their number doubles
+/// with depth; with it a node holds one stretch per stretch of its parent, so a walk visits
+/// each node at most once per root stretch.
+#[inline(always)]
+fn insert<T: Real>(found: &mut [Stretch<T>], n: &mut usize, s: Stretch<T>) -> bool {
+    let mut s = s;
+    if let Some(j) = found[..*n]
+        .iter()
+        .position(|f| (f.level, f.x, f.y) == (s.level, s.x, s.y))
+    {
+        s.h = [found[j].h[0].min(s.h[0]), found[j].h[1].max(s.h[1])];
+        found.copy_within(j + 1..*n, j);
+        *n -= 1;
     }
+    if *n == found.len() {
+        return false;
+    }
+    let mut i = *n;
+    while i > 0 && found[i - 1].order() > s.order() {
+        found[i] = found[i - 1];
+        i -= 1;
+    }
+    found[i] = s;
+    *n += 1;
     true
 }
 
@@ -576,18 +635,21 @@ pub(crate) fn walk_cells<T: Real, const STACK_LEN: usize>(
     let uv_tri = CellTriangle::new(uv_in_cells(prism, cells.size));
     let mut t = t_max;
     let mut stack = [Stretch::empty(); STACK_LEN];
-    let complete = traverse_curve_cells(
-        &mut stack,
+    let walk = CurveWalk {
         root,
-        [h_lo, h_hi],
         curve,
         edges,
         cells,
-        &uv_tri,
+        uv_tri: &uv_tri,
+        node_heights: &node_heights,
+    };
+    let complete = traverse_curve_cells(
+        &mut stack,
+        &walk,
+        [h_lo, h_hi],
         t_min,
         &mut t,
         stats,
-        &node_heights,
         &mut leaf,
     );
     if !complete {
