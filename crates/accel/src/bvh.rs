@@ -944,11 +944,8 @@ mod tests {
         let bvh = Bvh4::build(&bs, 2);
         let (mut cases, mut met, mut missed) = (0, 0, 0);
         for i in 0..400 {
-            let mut slope = || {
-                let m = r() - 0.5;
-                if r() < 0.2 { m * 1e-9 } else { m }
-            };
-            let d = v(slope(), slope(), slope());
+            let mut component = || crate::test_util::direction_component(&mut r);
+            let d = v(component(), component(), component());
             // Every fourth ray starts on a box's lower face.
             let o = if i % 4 == 0 {
                 let b = &bs[i % bs.len()];

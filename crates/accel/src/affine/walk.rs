@@ -927,16 +927,14 @@ fn clip<T: Real>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::test_util::unit_randoms;
+    use crate::test_util::{direction_component, unit_randoms};
     use nlrt_poly::lanes4::Portable4;
     use nlrt_poly::{Vector2, Vector3};
     use nlrt_shellmap::Prism;
 
-    /// The vector child step against the scalar one and against the portable lanes, bit for
-    /// bit, on lines of every slope (near-axis ones, whose reciprocals are huge, included),
-    /// far origins, nodes on and off the line's path from level 1 to 12, and random sample
-    /// bounds around the line's heights.
-    fn child_steps_agree<T: Real>() {
+    /// The unit right triangle with a flat, vertical prism on a map of `side` texels per
+    /// unit: a texel triangle for walks whose steps the tests compare.
+    fn unit_triangle<T: Real>(side: i32) -> TexelTriangle<T> {
         let v3 =
             |x: f64, y: f64, z: f64| T::Vec3::new(T::from_f64(x), T::from_f64(y), T::from_f64(z));
         let uv = |x: f64, y: f64| T::Vec2::new(T::from_f64(x), T::from_f64(y));
@@ -945,16 +943,23 @@ mod tests {
             [v3(0.0, 0.0, 1.0); 3],
             [uv(0.0, 0.0), uv(1.0, 0.0), uv(0.0, 1.0)],
         );
-        let triangle = TexelTriangle::new(&prism, T::from_i32(4096), [false; 3]);
+        TexelTriangle::new(&prism, T::from_i32(side), [false; 3])
+    }
+
+    /// The vector child step against the scalar one and against the portable lanes, bit for
+    /// bit, on lines of every slope (near-axis ones, whose reciprocals are huge, included),
+    /// far origins, nodes on and off the line's path from level 1 to 12, and random sample
+    /// bounds around the line's heights.
+    fn child_steps_agree<T: Real>() {
+        let triangle = unit_triangle::<T>(4096);
         let mut r = unit_randoms(46);
         let (mut cases, mut met, mut missed) = (0, 0, 0);
         for _ in 0..20_000 {
-            let slope = |r: &mut dyn FnMut() -> f64| {
-                let m = (r() - 0.5) * 2.0;
-                // One component in five is tiny: a line nearly parallel to an axis.
-                if r() < 0.2 { m * 1e-9 } else { m }
-            };
-            let dir = [slope(&mut r), slope(&mut r), slope(&mut r) * 1e-3];
+            let dir = [
+                direction_component(&mut r),
+                direction_component(&mut r),
+                direction_component(&mut r) * 1e-3,
+            ];
             let origin = [
                 r() * 8192.0 - 2048.0,
                 r() * 8192.0 - 2048.0,
@@ -1040,24 +1045,12 @@ mod tests {
     /// The vector box step against four scalar box tests and the portable lanes, bit for bit:
     /// boxes around points on the line and anywhere, of every size, on lines of every slope.
     fn box_steps_agree<T: Real>() {
-        let v3 =
-            |x: f64, y: f64, z: f64| T::Vec3::new(T::from_f64(x), T::from_f64(y), T::from_f64(z));
-        let uv = |x: f64, y: f64| T::Vec2::new(T::from_f64(x), T::from_f64(y));
-        let prism = Prism::new(
-            [v3(0.0, 0.0, 0.0), v3(1.0, 0.0, 0.0), v3(0.0, 1.0, 0.0)],
-            [v3(0.0, 0.0, 1.0); 3],
-            [uv(0.0, 0.0), uv(1.0, 0.0), uv(0.0, 1.0)],
-        );
-        let triangle = TexelTriangle::new(&prism, T::from_i32(64), [false; 3]);
+        let triangle = unit_triangle::<T>(64);
         let mut r = unit_randoms(4646);
         let t = |v: f64| T::from_f64(v);
         let (mut cases, mut met, mut missed) = (0, 0, 0);
         for _ in 0..20_000 {
-            let mut slope = || {
-                let m = (r() - 0.5) * 2.0;
-                if r() < 0.2 { m * 1e-9 } else { m }
-            };
-            let dir = [slope(), slope(), slope()];
+            let dir: [f64; 3] = core::array::from_fn(|_| direction_component(&mut r));
             let origin = [r() * 64.0, r() * 64.0, r() * 2.0 - 0.5];
             let line = StraightLine {
                 origin: origin.map(t),
