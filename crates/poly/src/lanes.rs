@@ -71,7 +71,8 @@ pub trait Lanes<T: Real>:
     }
 }
 
-/// Eight scalars: the reference implementation of [`Lanes`], and the one used without AVX2.
+/// `N` scalars (eight by default): the reference implementation of [`Lanes`] (eight) and of
+/// [`crate::Lanes4`] (four), and the ones used without AVX2.
 #[cfg_attr(
     all(
         target_arch = "x86_64",
@@ -84,9 +85,9 @@ pub trait Lanes<T: Real>:
     )
 )]
 #[derive(Clone, Copy, Debug)]
-pub struct Portable<T>([T; LANES]);
+pub struct Portable<T, const N: usize = LANES>(pub(crate) [T; N]);
 
-/// The mask of [`Portable`].
+/// The mask of [`Portable`]: bit `i` lane `i`, no bit at or above `N`.
 #[cfg_attr(
     all(
         target_arch = "x86_64",
@@ -99,30 +100,31 @@ pub struct Portable<T>([T; LANES]);
     )
 )]
 #[derive(Clone, Copy, Debug)]
-pub struct PortableMask(u8);
+pub struct PortableMask<const N: usize = LANES>(u8);
 
-impl BitAnd for PortableMask {
+impl<const N: usize> BitAnd for PortableMask<N> {
     type Output = Self;
     #[inline(always)]
     fn bitand(self, o: Self) -> Self {
         Self(self.0 & o.0)
     }
 }
-impl BitOr for PortableMask {
+impl<const N: usize> BitOr for PortableMask<N> {
     type Output = Self;
     #[inline(always)]
     fn bitor(self, o: Self) -> Self {
         Self(self.0 | o.0)
     }
 }
-impl Not for PortableMask {
+impl<const N: usize> Not for PortableMask<N> {
     type Output = Self;
     #[inline(always)]
     fn not(self) -> Self {
-        Self(!self.0)
+        // Only the `N` lanes' bits: a native mask has no others.
+        Self(!self.0 & (u8::MAX >> (8 - N)))
     }
 }
-impl LaneMask for PortableMask {
+impl<const N: usize> LaneMask for PortableMask<N> {
     #[inline(always)]
     fn bits(self) -> u8 {
         self.0
@@ -131,7 +133,7 @@ impl LaneMask for PortableMask {
 
 macro_rules! portable_binary {
     ($trait:ident, $f:ident, $op:tt) => {
-        impl<T: Real> $trait for Portable<T> {
+        impl<T: Real, const N: usize> $trait for Portable<T, N> {
             type Output = Self;
             #[inline(always)]
             fn $f(self, o: Self) -> Self {
@@ -145,7 +147,7 @@ portable_binary!(Sub, sub, -);
 portable_binary!(Mul, mul, *);
 portable_binary!(Div, div, /);
 
-impl<T: Real> Neg for Portable<T> {
+impl<T: Real, const N: usize> Neg for Portable<T, N> {
     type Output = Self;
     #[inline(always)]
     fn neg(self) -> Self {
@@ -153,25 +155,38 @@ impl<T: Real> Neg for Portable<T> {
     }
 }
 
-impl<T: Real> Portable<T> {
-    #[cfg_attr(
-        all(
-            target_arch = "x86_64",
-            target_feature = "avx2",
-            target_feature = "fma"
-        ),
-        allow(
-            dead_code,
-            reason = "with AVX2 and FMA only the tests run the portable lanes"
-        )
-    )]
+#[cfg_attr(
+    all(
+        target_arch = "x86_64",
+        target_feature = "avx2",
+        target_feature = "fma"
+    ),
+    allow(
+        dead_code,
+        reason = "with AVX2 and FMA only the tests run the portable lanes"
+    )
+)]
+impl<T: Real, const N: usize> Portable<T, N> {
+    /// `f` of each lane pair as a mask.
     #[inline(always)]
-    fn compare(self, o: Self, f: impl Fn(T, T) -> bool) -> PortableMask {
+    pub(crate) fn compare(self, o: Self, f: impl Fn(T, T) -> bool) -> PortableMask<N> {
         let mut bits = 0u8;
-        for i in 0..LANES {
+        for i in 0..N {
             bits |= u8::from(f(self.0[i], o.0[i])) << i;
         }
         PortableMask(bits)
+    }
+
+    /// `self * a + b` lane by lane, one rounding each.
+    #[inline(always)]
+    pub(crate) fn fused(self, a: Self, b: Self) -> Self {
+        Self(core::array::from_fn(|i| self.0[i].mul_add(a.0[i], b.0[i])))
+    }
+
+    /// `|self|` lane by lane.
+    #[inline(always)]
+    pub(crate) fn magnitude(self) -> Self {
+        Self(self.0.map(T::abs))
     }
 }
 
@@ -191,11 +206,11 @@ impl<T: Real> Lanes<T> for Portable<T> {
     }
     #[inline(always)]
     fn mul_add(self, a: Self, b: Self) -> Self {
-        Self(core::array::from_fn(|i| self.0[i].mul_add(a.0[i], b.0[i])))
+        self.fused(a, b)
     }
     #[inline(always)]
     fn abs(self) -> Self {
-        Self(self.0.map(T::abs))
+        self.magnitude()
     }
     #[inline(always)]
     fn sqrt(self) -> Self {

@@ -6,8 +6,8 @@
 //! (the walks' tests check it).
 
 use crate::Real;
-use crate::lanes::LaneMask;
-use core::ops::{Add, BitAnd, BitOr, Div, Mul, Neg, Not, Sub};
+use crate::lanes::{LaneMask, PortableMask};
+use core::ops::{Add, Div, Mul, Neg, Sub};
 
 /// Four lanes of `T` with the operations of the walks' child steps (IEEE semantics per lane).
 pub trait Lanes4<T: Real>:
@@ -43,79 +43,12 @@ pub trait Lanes4<T: Real>:
     fn gt(self, o: Self) -> Self::Mask;
 }
 
-/// Four scalars: the reference implementation of [`Lanes4`], and the one used without AVX2.
-#[derive(Clone, Copy, Debug)]
-pub struct Portable4<T>([T; 4]);
-
-/// The mask of [`Portable4`].
-#[derive(Clone, Copy, Debug)]
-pub struct Portable4Mask(u8);
-
-impl BitAnd for Portable4Mask {
-    type Output = Self;
-    #[inline(always)]
-    fn bitand(self, o: Self) -> Self {
-        Self(self.0 & o.0)
-    }
-}
-impl BitOr for Portable4Mask {
-    type Output = Self;
-    #[inline(always)]
-    fn bitor(self, o: Self) -> Self {
-        Self(self.0 | o.0)
-    }
-}
-impl Not for Portable4Mask {
-    type Output = Self;
-    #[inline(always)]
-    fn not(self) -> Self {
-        Self(!self.0 & 0xf)
-    }
-}
-impl LaneMask for Portable4Mask {
-    #[inline(always)]
-    fn bits(self) -> u8 {
-        self.0
-    }
-}
-
-macro_rules! portable_binary {
-    ($trait:ident, $f:ident, $op:tt) => {
-        impl<T: Real> $trait for Portable4<T> {
-            type Output = Self;
-            #[inline(always)]
-            fn $f(self, o: Self) -> Self {
-                Self(core::array::from_fn(|i| self.0[i] $op o.0[i]))
-            }
-        }
-    };
-}
-portable_binary!(Add, add, +);
-portable_binary!(Sub, sub, -);
-portable_binary!(Mul, mul, *);
-portable_binary!(Div, div, /);
-
-impl<T: Real> Neg for Portable4<T> {
-    type Output = Self;
-    #[inline(always)]
-    fn neg(self) -> Self {
-        Self(self.0.map(|v| -v))
-    }
-}
-
-impl<T: Real> Portable4<T> {
-    #[inline(always)]
-    fn compare(self, o: Self, f: impl Fn(T, T) -> bool) -> Portable4Mask {
-        let mut bits = 0u8;
-        for i in 0..4 {
-            bits |= u8::from(f(self.0[i], o.0[i])) << i;
-        }
-        Portable4Mask(bits)
-    }
-}
+/// Four scalars: the reference implementation of [`Lanes4`], and the one used without AVX2
+/// (the eight-lane portable type at width four).
+pub type Portable4<T> = crate::lanes::Portable<T, 4>;
 
 impl<T: Real> Lanes4<T> for Portable4<T> {
-    type Mask = Portable4Mask;
+    type Mask = PortableMask<4>;
     #[inline(always)]
     fn splat(v: T) -> Self {
         Self([v; 4])
@@ -130,11 +63,11 @@ impl<T: Real> Lanes4<T> for Portable4<T> {
     }
     #[inline(always)]
     fn mul_add(self, a: Self, b: Self) -> Self {
-        Self(core::array::from_fn(|i| self.0[i].mul_add(a.0[i], b.0[i])))
+        self.fused(a, b)
     }
     #[inline(always)]
     fn abs(self) -> Self {
-        Self(self.0.map(T::abs))
+        self.magnitude()
     }
     #[inline(always)]
     fn lesser(self, o: Self) -> Self {
@@ -157,15 +90,15 @@ impl<T: Real> Lanes4<T> for Portable4<T> {
         }))
     }
     #[inline(always)]
-    fn le(self, o: Self) -> Portable4Mask {
+    fn le(self, o: Self) -> PortableMask<4> {
         self.compare(o, |a, b| a <= b)
     }
     #[inline(always)]
-    fn ge(self, o: Self) -> Portable4Mask {
+    fn ge(self, o: Self) -> PortableMask<4> {
         self.compare(o, |a, b| a >= b)
     }
     #[inline(always)]
-    fn gt(self, o: Self) -> Portable4Mask {
+    fn gt(self, o: Self) -> PortableMask<4> {
         self.compare(o, |a, b| a > b)
     }
 }
