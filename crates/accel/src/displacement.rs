@@ -12,6 +12,7 @@ use crate::affine::{AffinePatches, walk_straight};
 use crate::bvh::{Aabb, Bvh4};
 use crate::cells::{CURVE_STACK, CellSize, walk_cells};
 use crate::heightfield::{HEIGHT_ONE, HeightField};
+use crate::leaving::{Element, Exclusion, Origin, up_crossing};
 use crate::mesh::{BaseMesh, MeshError};
 use crate::pose::{PoseUpdate, TlasUpdate};
 use crate::precision::{PrismSearch, Search};
@@ -96,6 +97,20 @@ pub enum TexelPart {
         /// The base edge.
         edge: u8,
     },
+}
+
+impl TexelPart {
+    /// The part's index among the texel's elements (`crate::leaving`): the two
+    /// microtriangles, the flat texel, the seam walls of the three base edges.
+    #[must_use]
+    pub(crate) fn index(self) -> u32 {
+        match self {
+            Self::Lower => 0,
+            Self::Upper => 1,
+            Self::Flat => 2,
+            Self::Wall { edge } => 3 + u32::from(edge),
+        }
+    }
 }
 
 /// A hit on a displaced surface.
@@ -544,6 +559,7 @@ impl<T: Real> DisplacedSurface<T> {
         self.search(
             traced_in_f64(ray),
             Search::Walk,
+            None,
             tri,
             prism,
             ray,
@@ -559,11 +575,11 @@ impl<T: Real> DisplacedSurface<T> {
     /// exercise the fallback).
     fn walk_blas<C: Real, const STACK_LEN: usize>(
         &self,
+        excluded: Option<Exclusion>,
         tri: usize,
         prism: &Prism<C>,
         ray: &NonlinearRay<C>,
-        t_min: C,
-        t_max: C,
+        [t_min, t_max]: [C; 2],
         stats: &mut TraversalStats,
     ) -> Option<SurfaceHit<C>> {
         let mut best = None;
@@ -592,7 +608,7 @@ impl<T: Real> DisplacedSurface<T> {
                 let (hit, part) = self.texel_hit(
                     prism,
                     ray,
-                    (&edges, &curve),
+                    (&edges, &curve, excluded),
                     [x, y],
                     [t_min, t_max],
                     &mut stats.undecided_in_f32,
@@ -623,6 +639,7 @@ impl<T: Real> DisplacedSurface<T> {
         self.search(
             traced_in_f64(ray),
             Search::EveryCell,
+            None,
             tri,
             prism,
             ray,
@@ -635,11 +652,11 @@ impl<T: Real> DisplacedSurface<T> {
     /// [`DisplacedSurface::intersect_blas_brute_force`] computed in `C`.
     fn brute_force_in<C: Real>(
         &self,
+        excluded: Option<Exclusion>,
         tri: usize,
         prism: &Prism<C>,
         ray: &NonlinearRay<C>,
-        t_min: C,
-        t_max: C,
+        [t_min, t_max]: [C; 2],
         stats: &mut TraversalStats,
     ) -> Option<SurfaceHit<C>> {
         let [x0, y0, x1, y1] = self.prisms.roots(tri).texels;
@@ -652,7 +669,7 @@ impl<T: Real> DisplacedSurface<T> {
                 if let Some((hit, part)) = self.texel_hit(
                     prism,
                     ray,
-                    (&edges, &curve),
+                    (&edges, &curve, excluded),
                     [x, y],
                     [t_min, t_max],
                     &mut stats.undecided_in_f32,
@@ -683,7 +700,7 @@ impl<T: Real> DisplacedSurface<T> {
         t_max: T,
         stats: &mut TraversalStats,
     ) -> Option<SurfaceHit<T>> {
-        self.walk_tlas(ray, [t_min, t_max], Query::Nearest, stats)
+        self.walk_tlas(ray, [t_min, t_max], Query::Nearest, None, stats)
     }
 
     /// Whether `ray` meets the surface at some `t` in `[t_min, t_max]` (a shadow ray's
@@ -691,28 +708,101 @@ impl<T: Real> DisplacedSurface<T> {
     /// the search, where the nearest hit would go on to the prisms whose boxes the ray
     /// enters before that hit.
     pub fn occluded(&self, ray: &Ray<T>, t_min: T, t_max: T, stats: &mut TraversalStats) -> bool {
-        self.walk_tlas(ray, [t_min, t_max], Query::Any, stats)
+        self.walk_tlas(ray, [t_min, t_max], Query::Any, None, stats)
             .is_some()
     }
 
-    /// The TLAS walk of [`DisplacedSurface::intersect`] and [`DisplacedSurface::occluded`].
+    /// The nearest hit of a ray that leaves the surface where it was hit at `from` (a bounce
+    /// ray): `ray` starts at `from`'s point as the caller computed it (the incoming ray at
+    /// `from.hit.t`), with no offset, and `from`'s element (its microtriangle, flat texel or
+    /// seam wall piece) is excluded by its id (`crate::leaving`), so that the ray cannot hit
+    /// the surface it starts on whatever the rounding of its origin and its angle. Distances
+    /// in `[0, t_max]`.
+    ///
+    /// ```
+    /// use nlrt_accel::{BaseMesh, DisplacedSurface, HeightField, TraversalStats, Wrap};
+    /// use nlrt_poly::glam::{DVec2, DVec3};
+    /// use nlrt_shellmap::Ray;
+    /// let p = vec![DVec3::ZERO, DVec3::X, DVec3::new(1.0, 1.0, 0.0), DVec3::Y];
+    /// let uv = p.iter().map(|p| DVec2::new(p.x, p.y)).collect();
+    /// let mesh = BaseMesh::new(p, vec![DVec3::Z; 4], uv, vec![[0, 1, 2], [0, 2, 3]]).unwrap();
+    /// let field = HeightField::new(4, 4, vec![u16::MAX; 16], Wrap::Repeat).unwrap();
+    /// let surface = DisplacedSurface::new(mesh, field, 0.5, 1.0).unwrap();
+    /// let stats = &mut TraversalStats::default();
+    /// let down = Ray::new(DVec3::new(0.3, 0.6, 2.0), -DVec3::Z).unwrap();
+    /// let hit = surface.intersect(&down, 0.0, f64::INFINITY, stats).unwrap();
+    /// // A ray leaving the plane from the hit point, grazing: the plain query finds the
+    /// // plane it starts on at once.
+    /// let along = Ray::new(down.at(hit.hit.t), DVec3::new(1.0, 0.2, 0.01)).unwrap();
+    /// assert!(surface.intersect(&along, 0.0, f64::INFINITY, stats).is_some());
+    /// assert!(surface.intersect_leaving(&along, &hit, f64::INFINITY, stats).is_none());
+    /// assert!(!surface.occluded_leaving(&along, &hit, f64::INFINITY, stats));
+    /// ```
+    pub fn intersect_leaving(
+        &self,
+        ray: &Ray<T>,
+        from: &SurfaceHit<T>,
+        t_max: T,
+        stats: &mut TraversalStats,
+    ) -> Option<SurfaceHit<T>> {
+        let origin = self.origin(from, ray.dir);
+        self.walk_tlas(ray, [T::ZERO, t_max], Query::Nearest, Some(&origin), stats)
+    }
+
+    /// Whether a ray leaving the surface at `from` meets it at a distance in `[0, t_max]` (a
+    /// shadow ray): [`DisplacedSurface::intersect_leaving`] as an occlusion query.
+    pub fn occluded_leaving(
+        &self,
+        ray: &Ray<T>,
+        from: &SurfaceHit<T>,
+        t_max: T,
+        stats: &mut TraversalStats,
+    ) -> bool {
+        let origin = self.origin(from, ray.dir);
+        self.walk_tlas(ray, [T::ZERO, t_max], Query::Any, Some(&origin), stats)
+            .is_some()
+    }
+
+    /// [`DisplacedSurface::intersect_leaving`] testing every texel of every triangle (the
+    /// reference for tests).
+    #[must_use]
+    pub fn intersect_leaving_brute_force(
+        &self,
+        ray: &Ray<T>,
+        from: &SurfaceHit<T>,
+        t_max: T,
+    ) -> Option<SurfaceHit<T>> {
+        self.brute_force(ray, [T::ZERO, t_max], Some(&self.origin(from, ray.dir)))
+    }
+
+    /// The TLAS walk of [`DisplacedSurface::intersect`], [`DisplacedSurface::occluded`] and
+    /// their leaving forms (`origin`: the element the ray leaves).
     fn walk_tlas(
         &self,
         ray: &Ray<T>,
         [t_min, t_max]: [T; 2],
         query: Query,
+        origin: Option<&Origin>,
         stats: &mut TraversalStats,
     ) -> Option<SurfaceHit<T>> {
         // Eq. 6's frame depends on the ray alone: set up once for all its prisms.
         let frame = ray.perpendiculars();
         let nearest_in = |tri: usize, prism: &Prism<T>, t_max: T, stats: &mut TraversalStats| {
+            let excluded = origin.and_then(|o| o.excluded_in(self.mesh(), tri));
             if self.straight_walk
                 && let Some((line, triangle)) = self.straight.line(tri, ray, t_min)
             {
                 // An affine patch has no seam edge (a seam's two sides differ in uv): no wall.
                 let roots = self.prisms.roots(tri);
-                let found =
-                    walk_straight(&self.field, roots, line?, triangle, t_min, t_max, stats)?;
+                let found = walk_straight(
+                    &self.field,
+                    roots,
+                    line?,
+                    triangle,
+                    [t_min, t_max],
+                    excluded,
+                    stats,
+                )?;
                 let mut hit = found.hit;
                 let uv = prism.texture_uv(hit.alpha, hit.beta);
                 (hit.u, hit.v) = (uv.x(), uv.y());
@@ -733,8 +823,18 @@ impl<T: Real> DisplacedSurface<T> {
             // `max_world_coordinate` (checked at construction): finite. A NaN curve would have
             // the walk visit every node (every comparison with NaN fails).
             debug_assert!(nl.is_finite(), "{nl:?} in {prism:?}");
-            let hit = self.intersect_blas(tri, prism, &nl, t_min, t_max, stats);
-            self.nearer_wall_hit(tri, prism, &nl, t_min, t_max, hit)
+            let hit = self.search(
+                traced_in_f64(&nl),
+                Search::Walk,
+                excluded,
+                tri,
+                prism,
+                &nl,
+                t_min,
+                t_max,
+                stats,
+            );
+            self.nearer_wall_hit(tri, prism, &nl, [t_min, t_max], excluded, hit)
         };
         self.prisms
             .traverse(ray, t_min, t_max, |tri, prism, t_max| {
@@ -750,10 +850,32 @@ impl<T: Real> DisplacedSurface<T> {
     /// The nearest hit testing every texel of every triangle (no TLAS, no pyramid, no prism
     /// gate): the reference for tests.
     pub fn intersect_brute_force(&self, ray: &Ray<T>, t_min: T, t_max: T) -> Option<SurfaceHit<T>> {
+        self.brute_force(ray, [t_min, t_max], None)
+    }
+
+    /// [`DisplacedSurface::intersect_brute_force`] with the element `origin` excluded.
+    fn brute_force(
+        &self,
+        ray: &Ray<T>,
+        [t_min, t_max]: [T; 2],
+        origin: Option<&Origin>,
+    ) -> Option<SurfaceHit<T>> {
         self.prisms
             .intersect_brute_force(ray, t_max, |tri, prism, nl, t_max| {
-                let hit = self.intersect_blas_brute_force(tri, prism, nl, t_min, t_max);
-                let hit = self.nearer_wall_hit(tri, prism, nl, t_min, t_max, hit)?;
+                let excluded = origin.and_then(|o| o.excluded_in(self.mesh(), tri));
+                let mut stats = TraversalStats::default();
+                let hit = self.search(
+                    traced_in_f64(nl),
+                    Search::EveryCell,
+                    excluded,
+                    tri,
+                    prism,
+                    nl,
+                    t_min,
+                    t_max,
+                    &mut stats,
+                );
+                let hit = self.nearer_wall_hit(tri, prism, nl, [t_min, t_max], excluded, hit)?;
                 Some((hit, hit.hit.t))
             })
     }
@@ -762,35 +884,44 @@ impl<T: Real> DisplacedSurface<T> {
     /// `None` where the shell degenerates to a line or point.
     #[must_use]
     pub fn normal(&self, hit: &SurfaceHit<T>, dir: T::Vec3) -> Option<T::Vec3> {
+        let (prism, abh) = self.element_plane(hit)?;
+        let n = world_normal(&prism, &abh, hit.hit.alpha, hit.hit.beta, hit.hit.h);
+        facing_unit::<T>(n, dir)
+    }
+
+    /// The prism of a hit and the plane of the element hit in its canonical coordinates
+    /// (`None` for a degenerate microtriangle).
+    fn element_plane(&self, hit: &SurfaceHit<T>) -> Option<(Prism<T>, [T; 4])> {
         let prism = self.prism(hit.triangle as usize);
-        let ([u0, v0, u1, v1], [h00, h10, h01, h11]) =
-            self.texel_geometry(hit.texel[0], hit.texel[1]);
-        let p = |u: T, v: T, h: T| T::Vec3::new(u, v, h);
-        let plane = match hit.part {
-            TexelPart::Flat => TexturePlane {
-                normal: T::Vec3::new(T::ZERO, T::ZERO, T::ONE),
-                k: -h00,
-            },
-            TexelPart::Lower => {
-                TexturePlane::through(&[p(u0, v0, h00), p(u1, v0, h10), p(u1, v1, h11)])?
-            }
-            TexelPart::Upper => {
-                TexturePlane::through(&[p(u0, v0, h00), p(u1, v1, h11), p(u0, v1, h01)])?
-            }
-            TexelPart::Wall { edge } => {
-                let abh = WALL_PLANES[usize::from(edge)].map(T::from_i32);
-                let n = world_normal(&prism, &abh, hit.hit.alpha, hit.hit.beta, hit.hit.h);
-                return facing_unit::<T>(n, dir);
+        if let TexelPart::Wall { edge } = hit.part {
+            return Some((prism, WALL_PLANES[usize::from(edge)].map(T::from_i32)));
+        }
+        let (uv, heights) = self.texel_geometry(hit.texel[0], hit.texel[1]);
+        let plane = plane_of(uv, heights, hit.part)?;
+        let abh = plane.canonical(&prism);
+        Some((prism, abh))
+    }
+
+    /// The element of `from`, as a ray leaving it in direction `dir` excludes it: on a
+    /// microtriangle or flat texel with the side it leaves to (`crate::leaving`).
+    fn origin(&self, from: &SurfaceHit<T>, dir: T::Vec3) -> Origin {
+        let leaves_up = match (from.part, self.element_plane(from)) {
+            (TexelPart::Wall { .. }, _) | (_, None) => None,
+            (_, Some((prism, abh))) => {
+                let point = [from.hit.alpha, from.hit.beta, from.hit.h];
+                Some(up_crossing(&prism, &abh, point, dir) >= T::ZERO)
             }
         };
-        let n = world_normal(
-            &prism,
-            &plane.canonical(&prism),
-            hit.hit.alpha,
-            hit.hit.beta,
-            hit.hit.h,
-        );
-        facing_unit::<T>(n, dir)
+        let size = self.texel_size.to_f64();
+        Origin {
+            triangle: from.triangle,
+            element: Element {
+                cell: from.texel,
+                index: from.part.index(),
+            },
+            leaves_up,
+            texel_point: [from.hit.u.to_f64() / size, from.hit.v.to_f64() / size],
+        }
     }
 }
 
@@ -838,6 +969,7 @@ impl<T: Real> PrismSearch<T> for DisplacedSurface<T> {
     fn search_in<C: Real>(
         &self,
         search: Search,
+        excluded: Option<Exclusion>,
         tri: usize,
         prism: &Prism<C>,
         ray: &NonlinearRay<C>,
@@ -846,8 +978,12 @@ impl<T: Real> PrismSearch<T> for DisplacedSurface<T> {
         stats: &mut TraversalStats,
     ) -> Option<SurfaceHit<C>> {
         match search {
-            Search::Walk => self.walk_blas::<C, CURVE_STACK>(tri, prism, ray, t_min, t_max, stats),
-            Search::EveryCell => self.brute_force_in(tri, prism, ray, t_min, t_max, stats),
+            Search::Walk => {
+                self.walk_blas::<C, CURVE_STACK>(excluded, tri, prism, ray, [t_min, t_max], stats)
+            }
+            Search::EveryCell => {
+                self.brute_force_in(excluded, tri, prism, ray, [t_min, t_max], stats)
+            }
         }
     }
 
@@ -1215,8 +1351,14 @@ mod tests {
                 let (mut full, mut tiny) = (TraversalStats::default(), TraversalStats::default());
                 let walked =
                     surface.intersect_blas(tri, &prism, &nl, 0.0, f64::INFINITY, &mut full);
-                let fell_back =
-                    surface.walk_blas::<f64, 2>(tri, &prism, &nl, 0.0, f64::INFINITY, &mut tiny);
+                let fell_back = surface.walk_blas::<f64, 2>(
+                    None,
+                    tri,
+                    &prism,
+                    &nl,
+                    [0.0, f64::INFINITY],
+                    &mut tiny,
+                );
                 let brute =
                     surface.intersect_blas_brute_force(tri, &prism, &nl, 0.0, f64::INFINITY);
                 assert!(same(walked, fell_back), "{walked:?} vs {fell_back:?}");

@@ -53,6 +53,7 @@ mod bvh;
 mod cells;
 mod displacement;
 mod heightfield;
+mod leaving;
 mod mesh;
 mod object_edges;
 mod pose;

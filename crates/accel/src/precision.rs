@@ -7,6 +7,7 @@
 use nlrt_poly::Real;
 use nlrt_shellmap::{NonlinearRay, Prism};
 
+use crate::leaving::Exclusion;
 use crate::stats::TraversalStats;
 
 /// Which search a surface runs over one base triangle.
@@ -23,11 +24,13 @@ pub(crate) trait PrismSearch<T: Real> {
     /// The hit of a search in `C`.
     type Hit<C: Real>;
 
-    /// `search` over base triangle `tri`, computed in `C`.
+    /// `search` over base triangle `tri`, computed in `C`; hits on the element `excluded`
+    /// (the one a ray leaves, `crate::leaving`) are not taken.
     #[allow(clippy::too_many_arguments)]
     fn search_in<C: Real>(
         &self,
         search: Search,
+        excluded: Option<Exclusion>,
         tri: usize,
         prism: &Prism<C>,
         ray: &NonlinearRay<C>,
@@ -47,6 +50,7 @@ pub(crate) trait PrismSearch<T: Real> {
         &self,
         in_f64: bool,
         search: Search,
+        excluded: Option<Exclusion>,
         tri: usize,
         prism: &Prism<T>,
         ray: &NonlinearRay<T>,
@@ -58,14 +62,14 @@ pub(crate) trait PrismSearch<T: Real> {
             stats.f64_prisms += 1;
             let (prism, ray) = nlrt_shellmap::in_f64(prism, &ray.ray);
             let (t_min, t_max) = (t_min.to_f64(), t_max.to_f64());
-            self.search_in(search, tri, &prism, &ray, t_min, t_max, stats)
+            self.search_in(search, excluded, tri, &prism, &ray, t_min, t_max, stats)
                 .map(Self::narrowed)
         };
         if in_f64 {
             return in_f64_whole(stats);
         }
         let undecided = stats.undecided_in_f32;
-        let hit = self.search_in(search, tri, prism, ray, t_min, t_max, stats);
+        let hit = self.search_in(search, excluded, tri, prism, ray, t_min, t_max, stats);
         // A decision the walk could not make in `T` (`TraversalStats::undecided_in_f32`): the
         // prism is traced again in `f64`, whole, so that it is decided in one arithmetic
         // (dropping the one hit `f64` disowns instead leaked where the two arithmetics'

@@ -6,6 +6,7 @@ use nlrt_poly::{Real, Vector2, solve_quadratic_in};
 use nlrt_shellmap::{BaseEdges, Hit, NonlinearRay, Prism, alpha_beta_eq11};
 
 use crate::displacement::{DisplacedSurface, SurfaceHit, TexelPart, WALL_PLANES};
+use crate::leaving::Exclusion;
 use crate::seam::{EDGE_VERTICES, NO_SEAM, edge_parameter};
 
 impl<T: Real> DisplacedSurface<T> {
@@ -17,14 +18,14 @@ impl<T: Real> DisplacedSurface<T> {
         tri: usize,
         prism: &Prism<T>,
         ray: &NonlinearRay<T>,
-        t_min: T,
-        t_max: T,
+        range: [T; 2],
+        excluded: Option<Exclusion>,
         hit: Option<SurfaceHit<T>>,
     ) -> Option<SurfaceHit<T>> {
         if !self.has_walls {
             return hit;
         }
-        self.nearer_wall_hit_of_seams(tri, prism, ray, t_min, t_max, hit)
+        self.nearer_wall_hit_of_seams(tri, prism, ray, range, excluded, hit)
     }
 
     /// [`DisplacedSurface::nearer_wall_hit`] on a mesh with seams closed by walls; kept out
@@ -35,8 +36,8 @@ impl<T: Real> DisplacedSurface<T> {
         tri: usize,
         prism: &Prism<T>,
         ray: &NonlinearRay<T>,
-        t_min: T,
-        t_max: T,
+        [t_min, t_max]: [T; 2],
+        excluded: Option<Exclusion>,
         hit: Option<SurfaceHit<T>>,
     ) -> Option<SurfaceHit<T>> {
         let Some(walls) = self.seams.of_triangle(tri) else {
@@ -46,7 +47,8 @@ impl<T: Real> DisplacedSurface<T> {
             return hit;
         }
         let t_max = hit.map_or(t_max, |h| h.hit.t);
-        self.wall_hit(tri, walls, prism, ray, t_min, t_max).or(hit)
+        self.wall_hit(tri, walls, prism, ray, [t_min, t_max], excluded)
+            .or(hit)
     }
 
     /// The nearest hit with `t` in `[t_min, t_max]` on the seam walls of triangle `tri`
@@ -59,14 +61,15 @@ impl<T: Real> DisplacedSurface<T> {
     /// heights within their values there plus their slope times that spread
     /// ([`DisplacedSurface::wall_covers`]); a ray is stopped if any height it may have there
     /// lies on the wall. So no ray slips through between a wall and the surfaces it joins.
+    /// The wall piece `excluded` (the one a ray leaves) is not hit.
     fn wall_hit(
         &self,
         tri: usize,
         walls: &[u32; 3],
         prism: &Prism<T>,
         ray: &NonlinearRay<T>,
-        t_min: T,
-        t_max: T,
+        [t_min, t_max]: [T; 2],
+        excluded: Option<Exclusion>,
     ) -> Option<SurfaceHit<T>> {
         let edges = BaseEdges::new(ray);
         let (mut best, mut t_max) = (None, t_max);
@@ -104,15 +107,19 @@ impl<T: Real> DisplacedSurface<T> {
                 if !self.wall_covers(tri, k, seam as usize, ray, h.to_f64(), w.to_f64()) {
                     continue;
                 }
-                t_max = t;
                 let hit = Hit::at(prism, t, alpha, beta, on_wall);
                 let texel = [hit.u, hit.v]
                     .map(|c| crate::tlas::texel_floor((c / self.texel_size).to_f64()));
+                let part = TexelPart::Wall { edge: k as u8 };
+                if excluded.is_some_and(|e| e.excludes(texel, part.index())) {
+                    continue;
+                }
+                t_max = t;
                 best = Some(SurfaceHit {
                     hit,
                     triangle: tri as u32,
                     texel,
-                    part: TexelPart::Wall { edge: k as u8 },
+                    part,
                 });
             }
         }

@@ -15,6 +15,7 @@ use nlrt_shellmap::{
 use crate::affine::{AffinePatches, Walk, walk_straight_tiles};
 use crate::bvh::{Aabb, Bvh4};
 use crate::cells::{CURVE_STACK, CellSize, walk_cells};
+use crate::leaving::{Element, Exclusion, Origin};
 use crate::mesh::{BaseMesh, MeshError};
 use crate::object_edges::ObjectEdges;
 use crate::pose::{PoseUpdate, TlasUpdate};
@@ -187,6 +188,22 @@ pub struct ShellHit<T: Real> {
     pub tile: [i32; 2],
     /// Object triangle (index into [`ShellObject::triangles`]).
     pub object_triangle: u32,
+}
+
+impl<T: Real> ShellHit<T> {
+    /// The element hit, as a ray leaving it excludes it.
+    #[must_use]
+    pub(crate) fn origin(&self) -> Origin {
+        Origin {
+            triangle: self.triangle,
+            element: Element {
+                cell: self.tile,
+                index: self.object_triangle,
+            },
+            leaves_up: None,
+            texel_point: [f64::NAN; 2],
+        }
+    }
 }
 
 /// A base mesh whose shell holds an object tiled `tiling x tiling` times per unit of uv.
@@ -388,6 +405,7 @@ impl<T: Real> ShellSurface<T> {
         [h_in, h_out]: [C; 2],
         t_min: C,
         t_max: &mut C,
+        excluded: Option<Exclusion>,
         best: &mut Option<ShellHit<C>>,
         stats: &mut TraversalStats,
     ) {
@@ -467,6 +485,9 @@ impl<T: Real> ShellSurface<T> {
                 if node.count[c] > 0 && t <= *t_max {
                     let first = node.index[c] as usize;
                     for &k in &order[first..first + node.count[c] as usize] {
+                        if excluded.is_some_and(|e| e.excludes([x, y], k)) {
+                            continue;
+                        }
                         stats.texel_tests += 1;
                         if let Some((hit, object_triangle)) = self.intersect_object_triangle(
                             prism,
@@ -476,7 +497,8 @@ impl<T: Real> ShellSurface<T> {
                             t_min,
                             *t_max,
                             [h_in, h_out],
-                        ) {
+                        ) && !excluded.is_some_and(|e| e.excludes([x, y], object_triangle))
+                        {
                             *t_max = hit.t;
                             *best = Some(ShellHit {
                                 hit,
@@ -511,6 +533,7 @@ impl<T: Real> ShellSurface<T> {
         prism: &Prism<T>,
         ray: &Ray<T>,
         [t_min, t_max]: [T; 2],
+        excluded: Option<Exclusion>,
         stats: &mut TraversalStats,
     ) -> Option<Option<ShellHit<T>>> {
         // Every prism of a curved mesh passes here: it leaves before any set-up.
@@ -532,7 +555,7 @@ impl<T: Real> ShellSurface<T> {
             self.prisms.roots(tri),
             [h_lo, h_hi],
             stats,
-            |x, y, t_best, stats| self.straight_tile(&walk, [x, y], t_best, stats),
+            |x, y, t_best, stats| self.straight_tile(&walk, [x, y], t_best, excluded, stats),
         );
         let Some((tau, (q, object_triangle, tile))) = found else {
             return Some(None);
@@ -575,6 +598,7 @@ impl<T: Real> ShellSurface<T> {
         walk: &Walk<'_, f64>,
         [x, y]: [i32; 2],
         t_best: f64,
+        excluded: Option<Exclusion>,
         stats: &mut TraversalStats,
     ) -> Option<(f64, ([f64; 3], u32, [i32; 2]))> {
         let nodes = self.object.bvh.nodes();
@@ -626,6 +650,9 @@ impl<T: Real> ShellSurface<T> {
                 if node.count[c] > 0 && t <= t_best {
                     let first = node.index[c] as usize;
                     for &k in &order[first..first + node.count[c] as usize] {
+                        if excluded.is_some_and(|e| e.excludes([x, y], k)) {
+                            continue;
+                        }
                         stats.texel_tests += 1;
                         let placed = Self::shifted(&self.object.triangles[k as usize], x, y)
                             .map(|p| [p.x().to_f64(), p.y().to_f64(), p.z().to_f64()]);
@@ -667,6 +694,7 @@ impl<T: Real> ShellSurface<T> {
         self.search(
             traced_in_f64::<T>(),
             Search::Walk,
+            None,
             tri,
             prism,
             ray,
@@ -691,6 +719,7 @@ impl<T: Real> ShellSurface<T> {
         self.search(
             in_f64,
             Search::EveryCell,
+            None,
             tri,
             prism,
             ray,
@@ -708,25 +737,68 @@ impl<T: Real> ShellSurface<T> {
         t_max: T,
         stats: &mut TraversalStats,
     ) -> Option<ShellHit<T>> {
-        self.walk_tlas(ray, [t_min, t_max], Query::Nearest, stats)
+        self.walk_tlas(ray, [t_min, t_max], Query::Nearest, None, stats)
     }
 
     /// Whether `ray` meets the object at some `t` in `[t_min, t_max]` (a shadow ray's
     /// query): as [`ShellSurface::intersect`], but the first prism that holds a hit ends the
     /// search.
     pub fn occluded(&self, ray: &Ray<T>, t_min: T, t_max: T, stats: &mut TraversalStats) -> bool {
-        self.walk_tlas(ray, [t_min, t_max], Query::Any, stats)
+        self.walk_tlas(ray, [t_min, t_max], Query::Any, None, stats)
             .is_some()
     }
 
-    /// The TLAS walk of [`ShellSurface::intersect`] and [`ShellSurface::occluded`].
+    /// The nearest hit of a ray that leaves the object where it was hit at `from` (a bounce
+    /// ray): `ray` starts at `from`'s point as the caller computed it, with no offset, and
+    /// `from`'s object triangle in its tile is excluded by its id (`crate::leaving`), so that
+    /// the ray cannot hit the triangle it starts on. Distances in `[0, t_max]`.
+    pub fn intersect_leaving(
+        &self,
+        ray: &Ray<T>,
+        from: &ShellHit<T>,
+        t_max: T,
+        stats: &mut TraversalStats,
+    ) -> Option<ShellHit<T>> {
+        let origin = from.origin();
+        self.walk_tlas(ray, [T::ZERO, t_max], Query::Nearest, Some(&origin), stats)
+    }
+
+    /// Whether a ray leaving the object at `from` meets it at a distance in `[0, t_max]` (a
+    /// shadow ray): [`ShellSurface::intersect_leaving`] as an occlusion query.
+    pub fn occluded_leaving(
+        &self,
+        ray: &Ray<T>,
+        from: &ShellHit<T>,
+        t_max: T,
+        stats: &mut TraversalStats,
+    ) -> bool {
+        let origin = from.origin();
+        self.walk_tlas(ray, [T::ZERO, t_max], Query::Any, Some(&origin), stats)
+            .is_some()
+    }
+
+    /// [`ShellSurface::intersect_leaving`] by brute force (the reference for tests).
+    #[must_use]
+    pub fn intersect_leaving_brute_force(
+        &self,
+        ray: &Ray<T>,
+        from: &ShellHit<T>,
+        t_max: T,
+    ) -> Option<ShellHit<T>> {
+        self.brute_force(ray, [T::ZERO, t_max], Some(&from.origin()))
+    }
+
+    /// The TLAS walk of [`ShellSurface::intersect`], [`ShellSurface::occluded`] and their
+    /// leaving forms (`origin`: the element the ray leaves).
     fn walk_tlas(
         &self,
         ray: &Ray<T>,
         [t_min, t_max]: [T; 2],
         query: Query,
+        origin: Option<&Origin>,
         stats: &mut TraversalStats,
     ) -> Option<ShellHit<T>> {
+        let excluded_in = |tri: usize| origin.and_then(|o| o.excluded_in(self.mesh(), tri));
         if traced_in_f64::<T>() {
             // Traced in `f64` (see `intersect_blas`): each prism's nonlinear ray is set up in
             // `f64` directly, with the ray's part once, not first in `T`.
@@ -739,8 +811,9 @@ impl<T: Real> ShellSurface<T> {
                         return None;
                     }
                     stats.prism_tests += 1;
+                    let excluded = excluded_in(tri);
                     if let Some(found) =
-                        self.intersect_straight(tri, prism, ray, [t_min, t_max], stats)
+                        self.intersect_straight(tri, prism, ray, [t_min, t_max], excluded, stats)
                     {
                         let hit = found?;
                         return Some((hit, query.range_after(hit.hit.t)));
@@ -748,7 +821,8 @@ impl<T: Real> ShellSurface<T> {
                     stats.f64_prisms += 1;
                     let (prism, nl) = wide.in_prism(prism);
                     let (search, t_max) = (Search::Walk, t_max.to_f64());
-                    let hit = self.search_in(search, tri, &prism, &nl, t_min_f64, t_max, stats)?;
+                    let hit = self
+                        .search_in(search, excluded, tri, &prism, &nl, t_min_f64, t_max, stats)?;
                     let hit = Self::narrowed(hit);
                     Some((hit, query.range_after(hit.hit.t)))
                 });
@@ -761,7 +835,9 @@ impl<T: Real> ShellSurface<T> {
                     return None;
                 }
                 stats.prism_tests += 1;
-                if let Some(found) = self.intersect_straight(tri, prism, ray, [t_min, t_max], stats)
+                let excluded = excluded_in(tri);
+                if let Some(found) =
+                    self.intersect_straight(tri, prism, ray, [t_min, t_max], excluded, stats)
                 {
                     let hit = found?;
                     return Some((hit, query.range_after(hit.hit.t)));
@@ -772,16 +848,47 @@ impl<T: Real> ShellSurface<T> {
                 // `max_world_coordinate` (checked at construction): finite. A NaN curve would have
                 // the walk visit every node (every comparison with NaN fails).
                 debug_assert!(nl.is_finite(), "{nl:?} in {prism:?}");
-                let hit = self.intersect_blas(tri, prism, &nl, t_min, t_max, stats)?;
+                let hit = self.search(
+                    traced_in_f64::<T>(),
+                    Search::Walk,
+                    excluded,
+                    tri,
+                    prism,
+                    &nl,
+                    t_min,
+                    t_max,
+                    stats,
+                )?;
                 Some((hit, query.range_after(hit.hit.t)))
             })
     }
 
     /// The nearest hit by brute force over every base triangle, tile and object triangle.
     pub fn intersect_brute_force(&self, ray: &Ray<T>, t_min: T, t_max: T) -> Option<ShellHit<T>> {
+        self.brute_force(ray, [t_min, t_max], None)
+    }
+
+    /// [`ShellSurface::intersect_brute_force`] with the element `origin` excluded.
+    fn brute_force(
+        &self,
+        ray: &Ray<T>,
+        [t_min, t_max]: [T; 2],
+        origin: Option<&Origin>,
+    ) -> Option<ShellHit<T>> {
         self.prisms
             .intersect_brute_force(ray, t_max, |tri, prism, nl, t_max| {
-                let hit = self.intersect_blas_brute_force(tri, prism, nl, t_min, t_max)?;
+                let excluded = origin.and_then(|o| o.excluded_in(self.mesh(), tri));
+                let hit = self.search(
+                    traced_in_f64::<T>(),
+                    Search::EveryCell,
+                    excluded,
+                    tri,
+                    prism,
+                    nl,
+                    t_min,
+                    t_max,
+                    &mut TraversalStats::default(),
+                )?;
                 Some((hit, hit.hit.t))
             })
     }
@@ -813,6 +920,7 @@ impl<T: Real> PrismSearch<T> for ShellSurface<T> {
     fn search_in<C: Real>(
         &self,
         search: Search,
+        excluded: Option<Exclusion>,
         tri: usize,
         prism: &Prism<C>,
         ray: &NonlinearRay<C>,
@@ -845,6 +953,7 @@ impl<T: Real> PrismSearch<T> for ShellSurface<T> {
                             h,
                             t_min,
                             &mut t,
+                            excluded,
                             &mut best,
                             stats,
                         );
@@ -858,6 +967,9 @@ impl<T: Real> PrismSearch<T> for ShellSurface<T> {
                 for y in y0..=y1 {
                     for x in x0..=x1 {
                         for k in 0..self.object.triangles.len() as u32 {
+                            if excluded.is_some_and(|e| e.excludes([x, y], k)) {
+                                continue;
+                            }
                             if let Some((hit, object_triangle)) = self.intersect_object_triangle(
                                 prism,
                                 ray,
@@ -866,7 +978,8 @@ impl<T: Real> PrismSearch<T> for ShellSurface<T> {
                                 t_min,
                                 t_max,
                                 [C::NEG_INFINITY, C::INFINITY],
-                            ) {
+                            ) && !excluded.is_some_and(|e| e.excludes([x, y], object_triangle))
+                            {
                                 t_max = hit.t;
                                 best = Some(ShellHit {
                                     hit,

@@ -2,13 +2,14 @@
 //! microtriangles, watertight along the texel's edges and the base triangle's (the piece
 //! search of `DisplacedSurface::intersect_texel`).
 
-use nlrt_poly::{QuadraticBatch, Real, decided_sign, solve_cubic_in, solve_quadratic_in};
+use nlrt_poly::{QuadraticBatch, Real, Vector2, decided_sign, solve_cubic_in, solve_quadratic_in};
 use nlrt_shellmap::{
     BaseEdges, Hit, NonlinearRay, Prism, TextureCurve, alpha_beta_eq11, piece_clear_in_f64,
     planes_agree_in_f64, root_decidedly_outside_in_f64,
 };
 
 use crate::displacement::{DisplacedSurface, TexelPart, plane_of};
+use crate::leaving::{Exclusion, up_crossing};
 
 impl<T: Real> DisplacedSurface<T> {
     /// The nearest hit on texel `(x, y)` with `t` in `[t_min, t_max]`.
@@ -43,7 +44,7 @@ impl<T: Real> DisplacedSurface<T> {
         self.texel_hit(
             prism,
             ray,
-            (&edges, &curve),
+            (&edges, &curve, None),
             [x, y],
             [t_min, t_max],
             &mut undecided,
@@ -62,7 +63,7 @@ impl<T: Real> DisplacedSurface<T> {
         &self,
         prism: &Prism<C>,
         ray: &NonlinearRay<C>,
-        (edges, curve): (&BaseEdges<C>, &TextureCurve<'_, C>),
+        (edges, curve, excluded): (&BaseEdges<C>, &TextureCurve<'_, C>, Option<Exclusion>),
         [x, y]: [i32; 2],
         [t_min, t_max]: [C; 2],
         undecided: &mut u32,
@@ -132,6 +133,18 @@ impl<T: Real> DisplacedSurface<T> {
         let splits = &mut splits[..n];
         splits.sort_unstable_by(|a, b| a.0.partial_cmp(&b.0).unwrap_or(core::cmp::Ordering::Equal));
 
+        // A ray leaving the surface does not hit its own element, nor touch a neighbour at
+        // its origin (`Exclusion::skips`).
+        let skipped = |part: TexelPart, abh: &[C; 4], point: [C; 3]| {
+            excluded.is_some_and(|e| {
+                let uv = prism.texture_uv(point[0], point[1]);
+                let size = self.texel_size.to_f64();
+                let at = [uv.x().to_f64() / size, uv.y().to_f64() / size];
+                e.skips([x, y], part.index(), at, || {
+                    up_crossing(prism, abh, point, ray.ray.dir)
+                })
+            })
+        };
         let mut best: Option<(Hit<C>, TexelPart)> = None;
         let mut t_max = t_max;
         let mut consider = |h: C, abh: &[C; 4], part: TexelPart, t_max: &mut C| {
@@ -145,7 +158,7 @@ impl<T: Real> DisplacedSurface<T> {
             // error outside, so clamp it onto the base triangle.
             let (alpha, beta) = nlrt_shellmap::onto_base_triangle(alpha, beta);
             let t = ray.signed_distance(prism, alpha, beta, h);
-            if t >= t_min && t <= *t_max {
+            if t >= t_min && t <= *t_max && !skipped(part, abh, [alpha, beta, h]) {
                 *t_max = t;
                 best = Some((Hit::at(prism, t, alpha, beta, h), part));
             }
@@ -300,6 +313,7 @@ impl<T: Real> DisplacedSurface<T> {
                 let (cubic, abh, part, plane) = side(lower);
                 if a == C::ZERO
                     && let Some(hit) = floor_hit(b, t_max)
+                    && !skipped(part, abh, [hit.alpha, hit.beta, C::ZERO])
                 {
                     t_max = hit.t;
                     floor = Some((hit, part));

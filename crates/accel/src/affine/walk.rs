@@ -6,6 +6,7 @@ use nlrt_shellmap::Hit;
 
 use super::patches::{StraightLine, TexelTriangle};
 use crate::heightfield::{HEIGHT_ONE, HeightField};
+use crate::leaving::Exclusion;
 use crate::stats::TraversalStats;
 use crate::tlas::RootNodes;
 
@@ -61,6 +62,8 @@ pub(crate) struct Walk<'a, T: Real> {
     /// The line's parameters inside the triangle's prism (the clip, padded).
     t_lo: T,
     t_hi: T,
+    /// The element the ray leaves (`crate::leaving`), not hit.
+    excluded: Option<Exclusion>,
 }
 
 /// A sample as a height in `[0, 1]`, as the curved path converts it.
@@ -202,7 +205,14 @@ impl<'a, T: Real> Walk<'a, T> {
             t_min,
             t_lo,
             t_hi,
+            excluded: None,
         })
+    }
+
+    /// The walk with the element `excluded` (the one the ray leaves) not hit.
+    #[must_use]
+    pub(crate) fn excluding(self, excluded: Option<Exclusion>) -> Self {
+        Self { excluded, ..self }
     }
 }
 
@@ -411,6 +421,13 @@ impl<T: Real> Walk<'_, T> {
         let mut best: Option<StraightHit<T>> = None;
         let mut t_max = t_max;
         for (part, [i, j, k]) in [(0u8, [0, 1, 3]), (1u8, [0, 3, 2])] {
+            let part = if flat { 2 } else { part };
+            if self
+                .excluded
+                .is_some_and(|e| e.excludes([x, y], u32::from(part)))
+            {
+                continue;
+            }
             let Some((t, bary)) = watertight(s[i], s[j], s[k]) else {
                 continue;
             };
@@ -421,6 +438,27 @@ impl<T: Real> Walk<'_, T> {
                 |a: usize| bary[0].mul_add(p[i][a], bary[1].mul_add(p[j][a], bary[2] * p[k][a]));
             let q = [point(0), point(1)];
             if !self.triangle.owns(q, self.window) {
+                continue;
+            }
+            // A ray leaving the surface touching a neighbour at its origin
+            // (`Exclusion::skips`): the line's climb above the plane through the three
+            // corners, `d/dt (h - H(u, v))`, from the plane's slopes along u and v.
+            if self.excluded.is_some_and(|e| {
+                e.skips(
+                    [x, y],
+                    u32::from(part),
+                    [q[0].to_f64(), q[1].to_f64()],
+                    || {
+                        let (slope_u, slope_v) = if k == 3 {
+                            (h[1] - h[0], h[3] - h[1])
+                        } else {
+                            (h[3] - h[2], h[2] - h[0])
+                        };
+                        let d = self.line.dir;
+                        d[2] - slope_u * d[0] - slope_v * d[1]
+                    },
+                )
+            }) {
                 continue;
             }
             let (alpha, beta) = self.triangle.canonical(q);
@@ -436,7 +474,7 @@ impl<T: Real> Walk<'_, T> {
                     v: T::ZERO,
                 },
                 texel: [x, y],
-                part: if flat { 2 } else { part },
+                part,
             });
         }
         best
@@ -729,17 +767,18 @@ fn sort_entries<T: Real>(entries: &mut [(T, T, i32, i32)], descending: bool) {
 /// The nearest hit of the straight `line` on the displaced surface over `triangle` (its root
 /// nodes `roots`) with `t` in `[t_min, t_max]`: the min-max pyramid walked nearest first
 /// along the line, texels tested by the watertight test. The hit's texture coordinates are
-/// left at 0 (the caller has the prism).
+/// left at 0 (the caller has the prism). The element `excluded` (the one a ray leaves) is not
+/// hit.
 pub(crate) fn walk_straight<T: Real>(
     field: &HeightField,
     roots: RootNodes,
     line: StraightLine<T>,
     triangle: &TexelTriangle<T>,
-    t_min: T,
-    t_max: T,
+    [t_min, t_max]: [T; 2],
+    excluded: Option<Exclusion>,
     stats: &mut TraversalStats,
 ) -> Option<StraightHit<T>> {
-    let walk = Walk::new(line, triangle, t_min, t_max)?;
+    let walk = Walk::new(line, triangle, t_min, t_max)?.excluding(excluded);
     let (t_lo, t_hi) = (walk.t_lo, walk.t_hi);
     let mut best: Option<StraightHit<T>> = None;
     let mut t_best = t_hi;
@@ -993,6 +1032,7 @@ mod tests {
                 t_min: T::ZERO,
                 t_lo: T::ZERO,
                 t_hi: T::ZERO,
+                excluded: None,
             };
             let level = 1 + (r() * 12.0) as u32;
             let size = f64::from(1u32 << level);

@@ -58,12 +58,28 @@ pub struct Frame {
     pub seconds: f64,
 }
 
-/// Offset of secondary ray origins along the normal, relative to the scene's size: f32 hit
+/// Offset of secondary ray origins along the normal, relative to the scene's size (the
+/// renderer's rule for every method; `nlrt_accel`'s `intersect_leaving` needs none): f32 hit
 /// points carry a relative error of about 2^-24 times the conditioning of the hit (below
 /// ~100 except at grazing angles), so about 1e-5 of the scene; 1e-4 leaves a factor 10 and
 /// stays well below the finest displacement detail (a texel of a 4096^2 map on a 2-unit
 /// mesh is 5e-4).
-const SECONDARY_OFFSET: f64 = 1e-4;
+pub const SECONDARY_OFFSET: f64 = 1e-4;
+
+/// The distance the renderer moves a secondary ray's origin along the hit's normal:
+/// [`SECONDARY_OFFSET`] times the length of the scene's bounding box diagonal.
+#[must_use]
+pub fn secondary_offset(scene: &Scene) -> f64 {
+    let lo = scene
+        .positions
+        .iter()
+        .fold(DVec3::INFINITY, |a, &p| a.min(p));
+    let hi = scene
+        .positions
+        .iter()
+        .fold(DVec3::NEG_INFINITY, |a, &p| a.max(p));
+    SECONDARY_OFFSET * (hi - lo).length().max(1e-9)
+}
 
 fn sky(dir: DVec3) -> DVec3 {
     let t = (dir.y * 0.5 + 0.5).clamp(0.0, 1.0);
@@ -100,18 +116,7 @@ fn render_with(
 ) -> (Frame, RayStream) {
     let (w, h) = (opts.width, opts.height);
     let aspect = w as f64 / h as f64;
-    let extent = {
-        let lo = scene
-            .positions
-            .iter()
-            .fold(DVec3::INFINITY, |a, &p| a.min(p));
-        let hi = scene
-            .positions
-            .iter()
-            .fold(DVec3::NEG_INFINITY, |a, &p| a.max(p));
-        (hi - lo).length().max(1e-9)
-    };
-    let offset = SECONDARY_OFFSET * extent;
+    let offset = secondary_offset(scene);
     let sun_radiance = DVec3::new(1.15, 1.05, 0.95);
     let primary = AtomicU64::new(0);
     let all = AtomicU64::new(0);
