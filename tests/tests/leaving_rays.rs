@@ -11,7 +11,7 @@
 use nlrt_accel::{
     BaseMesh, DisplacedSurface, HeightField, ShellObject, ShellSurface, TraversalStats, Wrap,
 };
-use nlrt_poly::{Real, Vector3};
+use nlrt_poly::{Real, Vector2, Vector3};
 use nlrt_shellmap::Ray;
 use nlrt_tests::geometry::{
     MapKind, SplitMix64, assert_occlusion_agrees, grid_mesh, height_map, random_object,
@@ -27,10 +27,6 @@ fn ray_count() -> usize {
         300
     }
 }
-
-/// How far from the origin, in texels per axis, the library takes a neighbour's crossing
-/// for the ray touching it at its origin (`nlrt_accel`'s `leaving.rs`).
-const TOUCH_RADIUS: f64 = 1.0 / 16.0;
 
 /// Leaving rays per primary hit.
 const LEAVING_PER_HIT: usize = 4;
@@ -179,16 +175,16 @@ fn displaced<T: Real>(
                 tally.hits_without_exclusion += 1;
             }
             // Beyond a thousandth of a texel the leaving query drops no hit but the origin's
-            // own element's and a neighbour's touch within 1/16 texel of the origin (the
-            // library's rule): the plain query from there on finds the same nearest hit.
+            // own element's and a neighbour's touch at the origin (within the library's
+            // `leaving_touch_distance`): the plain query from there on finds the same
+            // nearest hit.
             if fast.is_none_or(|f| f.hit.t >= near) {
                 let plain =
                     surface.intersect(&leave, near, T::INFINITY, &mut TraversalStats::default());
-                let texels = |c: T| c.to_f64() * side as f64;
+                let touch = surface.leaving_touch_distance(&hit, dir).unwrap_or(0.0);
                 let own = plain.is_some_and(|p| {
                     (p.triangle == hit.triangle && p.texel == hit.texel && p.part == hit.part)
-                        || ((texels(p.hit.u) - texels(hit.hit.u)).abs() <= TOUCH_RADIUS
-                            && (texels(p.hit.v) - texels(hit.hit.v)).abs() <= TOUCH_RADIUS)
+                        || p.hit.t.to_f64() <= touch
                 });
                 let same = match (fast, plain) {
                     (None, None) => true,
@@ -268,7 +264,7 @@ fn shell<T: Real>(bend: f64, tiling: f64, object_size: usize) {
         ShellSurface::new(mesh, object, T::from_f64(HEIGHT_SCALE), T::from_f64(tiling)).unwrap();
     let mut rng = SplitMix64::new(seed ^ 0x5e11);
     let t_bound = T::from_f64(3.0) * T::EPSILON.sqrt();
-    let (mut leaving, mut hits, mut mismatches) = (0, 0, 0);
+    let (mut leaving, mut hits, mut mismatches, mut back_blocked) = (0, 0, 0, 0);
     for _ in 0..ray_count() {
         let (o, d) = ray_from_above(&mut rng, 0.2);
         let ray = Ray::new(vec3::<T>(o), vec3::<T>(d)).unwrap();
@@ -277,6 +273,15 @@ fn shell<T: Real>(bend: f64, tiling: f64, object_size: usize) {
             continue;
         };
         let origin = ray.at(hit.hit.t);
+        // Back along the primary ray, open up to its origin (it found nothing nearer).
+        let back = Ray::new(origin, -ray.dir).unwrap();
+        let before_eye = hit.hit.t * T::from_f64(0.999);
+        let blocked =
+            surface.intersect_leaving(&back, &hit, before_eye, &mut TraversalStats::default());
+        if blocked.is_some() {
+            back_blocked += 1;
+            eprintln!("{}: back from {hit:?} blocked by {blocked:?}", T::NAME);
+        }
         let normal = surface.normal(&hit, ray.dir).unwrap();
         for _ in 0..LEAVING_PER_HIT {
             let azimuth = 2.0 * std::f64::consts::PI * rng.unit();
@@ -325,12 +330,89 @@ fn shell<T: Real>(bend: f64, tiling: f64, object_size: usize) {
         }
     }
     eprintln!(
-        "{} shell bend {bend} x{tiling} object {object_size}: {leaving} leaving rays, {hits} hits, {mismatches} mismatches",
+        "{} shell bend {bend} x{tiling} object {object_size}: {leaving} leaving rays, {hits} hits, {mismatches} mismatches, {back_blocked} blocked back along the primary ray",
         T::NAME
     );
+    assert_eq!(back_blocked, 0);
     assert!(leaving > ray_count(), "most primary rays hit");
     assert!(hits > 0, "some leaving rays meet another triangle");
     assert_eq!(mismatches, 0);
+}
+
+/// The unit square of [`grid_mesh`] (flat, `n x n` quads) with a uv seam down its middle:
+/// the right half's vertices are its own, their uvs shifted, so its texels are not the left
+/// half's and the seam is closed by a wall where the two sides' heights differ.
+fn seamed_mesh<T: Real>(n: usize) -> BaseMesh<T> {
+    let flat = grid_mesh::<T>(n, 0.0, false);
+    let (mut positions, mut normals, mut uvs) = (
+        flat.positions().to_vec(),
+        flat.normals().to_vec(),
+        flat.uvs().to_vec(),
+    );
+    let half = T::from_f64(0.5);
+    let shift = T::Vec2::new(T::from_f64(0.375), T::from_f64(0.25));
+    let mut copies = std::collections::HashMap::new();
+    let triangles = (0..flat.triangle_count())
+        .map(|t| {
+            let tri = flat.triangle(t);
+            let right = tri.iter().all(|&i| positions[i as usize].x() >= half);
+            tri.map(|i| {
+                if !right {
+                    return i;
+                }
+                *copies.entry(i).or_insert_with(|| {
+                    let k = i as usize;
+                    positions.push(positions[k]);
+                    normals.push(normals[k]);
+                    uvs.push(uvs[k] + shift);
+                    (positions.len() - 1) as u32
+                })
+            })
+        })
+        .collect();
+    BaseMesh::new(positions, normals, uvs, triangles).unwrap()
+}
+
+/// A ray leaving a hit back along the primary ray that found it is open up to the primary
+/// ray's origin: that ray found nothing nearer. Whatever the origin's rounding, the element
+/// it lies on and the neighbours it touches there are not hit.
+fn back_along_the_primary<T: Real>(surface: &DisplacedSurface<T>, label: &str) {
+    let mut rng = SplitMix64::new(0xbac4);
+    let (mut hits, mut walls) = (0, 0);
+    for k in 0..ray_count() {
+        let (o, d) = if k % 2 == 0 {
+            ray_from_above(&mut rng, 0.1)
+        } else {
+            // Low, across the middle of the square (the seamed mesh's seam, where its walls
+            // stand), at a point within the shell's heights.
+            let target = [0.5, rng.unit(), HEIGHT_SCALE * rng.unit()];
+            let side = if rng.unit() < 0.5 { 1.0 } else { -1.0 };
+            let d = direction(-(0.05 + 0.3 * rng.unit()), side * 0.3 * (rng.unit() - 0.5));
+            let d = [side * d[0], d[1], d[2]];
+            let o = core::array::from_fn(|i| target[i] - 2.0 * d[i]);
+            (o, d)
+        };
+        let ray = Ray::new(vec3::<T>(o), vec3::<T>(d)).unwrap();
+        let Some(hit) =
+            surface.intersect(&ray, T::ZERO, T::INFINITY, &mut TraversalStats::default())
+        else {
+            continue;
+        };
+        hits += 1;
+        walls += usize::from(matches!(hit.part, nlrt_accel::TexelPart::Wall { .. }));
+        let back = Ray::new(ray.at(hit.hit.t), -ray.dir).unwrap();
+        let before_eye = hit.hit.t * T::from_f64(0.999);
+        let stats = &mut TraversalStats::default();
+        let blocked = surface.intersect_leaving(&back, &hit, before_eye, stats);
+        assert!(
+            blocked.is_none(),
+            "{} {label}: back along {o:?} {d:?} from {hit:?}: {blocked:?}",
+            T::NAME
+        );
+        assert!(!surface.occluded_leaving(&back, &hit, before_eye, stats));
+    }
+    eprintln!("{} {label}: {hits} hits, {walls} on seam walls", T::NAME);
+    assert!(hits > ray_count() / 2, "most rays hit");
 }
 
 macro_rules! leaving_tests {
@@ -369,6 +451,25 @@ macro_rules! leaving_tests {
                 for kind in [MapKind::Random, MapKind::Spikes] {
                     let tally = displaced::<$t>(kind, 32, 2.0, 0.15, true, false);
                     assert!(tally.hits > 0, "some rays meet the surface again: {tally:?}");
+                }
+            }
+
+            #[test]
+            fn back_along_the_primary_ray_is_open() {
+                let seed = 7;
+                for kind in [MapKind::Random, MapKind::Spikes, MapKind::Plateaus] {
+                    for (label, mesh, straight) in [
+                        ("flat, straight walk", grid_mesh::<$t>(2, 0.0, false), true),
+                        ("flat, curved walk", grid_mesh::<$t>(2, 0.0, false), false),
+                        ("bent", grid_mesh::<$t>(2, 0.15, false), true),
+                        ("seamed", seamed_mesh::<$t>(2), true),
+                    ] {
+                        let field = height_map(32, kind, Wrap::Repeat, seed);
+                        let mut surface =
+                            DisplacedSurface::new(mesh, field, HEIGHT_SCALE as $t, 1.0).unwrap();
+                        surface.set_straight_walk(straight);
+                        back_along_the_primary(&surface, &format!("{kind:?} {label}"));
+                    }
                 }
             }
 

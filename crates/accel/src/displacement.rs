@@ -12,7 +12,7 @@ use crate::affine::{AffinePatches, walk_straight};
 use crate::bvh::{Aabb, Bvh4};
 use crate::cells::{CURVE_STACK, CellSize, walk_cells};
 use crate::heightfield::{HEIGHT_ONE, HeightField};
-use crate::leaving::{Element, Exclusion, Origin, up_crossing};
+use crate::leaving::{Element, Exclusion, Origin, TOUCH_RADIUS, Touch, texel_length, up_crossing};
 use crate::mesh::{BaseMesh, MeshError};
 use crate::pose::{PoseUpdate, TlasUpdate};
 use crate::precision::{PrismSearch, Search};
@@ -763,6 +763,17 @@ impl<T: Real> DisplacedSurface<T> {
             .is_some()
     }
 
+    /// The distance (in units of the ray parameter) within which a ray leaving the surface
+    /// at `from` in direction `dir` does not take a neighbouring microtriangle that it
+    /// crosses towards the side it left to ([`DisplacedSurface::intersect_leaving`]: a touch
+    /// at its origin, where the origin lies on their shared edge or corner or within its
+    /// rounding of one), or the other prism of a seam meets the wall it leaves: 1/16 of a
+    /// texel's world length at the origin. `None` where the element hit is degenerate.
+    #[must_use]
+    pub fn leaving_touch_distance(&self, from: &SurfaceHit<T>, dir: T::Vec3) -> Option<f64> {
+        self.origin(from, dir).touch.map(|touch| touch.within)
+    }
+
     /// [`DisplacedSurface::intersect_leaving`] testing every texel of every triangle (the
     /// reference for tests).
     #[must_use]
@@ -903,24 +914,34 @@ impl<T: Real> DisplacedSurface<T> {
     }
 
     /// The element of `from`, as a ray leaving it in direction `dir` excludes it: on a
-    /// microtriangle or flat texel with the side it leaves to (`crate::leaving`).
+    /// microtriangle or flat texel with the side it leaves to and the ray parameter of a
+    /// touch at the origin (`crate::leaving`).
     fn origin(&self, from: &SurfaceHit<T>, dir: T::Vec3) -> Origin {
-        let leaves_up = match (from.part, self.element_plane(from)) {
-            (TexelPart::Wall { .. }, _) | (_, None) => None,
-            (_, Some((prism, abh))) => {
-                let point = [from.hit.alpha, from.hit.beta, from.hit.h];
-                Some(up_crossing(&prism, &abh, point, dir) >= T::ZERO)
+        let plane = self.element_plane(from);
+        let touch = plane.map(|(prism, abh)| {
+            let point = [from.hit.alpha, from.hit.beta, from.hit.h];
+            let texel = texel_length(&prism, from.hit.h, self.texel_size.to_f64());
+            Touch {
+                leaves_up: (!matches!(from.part, TexelPart::Wall { .. }))
+                    .then(|| up_crossing(&prism, &abh, point, dir) >= T::ZERO),
+                within: TOUCH_RADIUS * texel / dir.length().to_f64(),
             }
+        });
+        let seam = match from.part {
+            TexelPart::Wall { edge } => self
+                .seams
+                .of_triangle(from.triangle as usize)
+                .map(|walls| walls[usize::from(edge)]),
+            _ => None,
         };
-        let size = self.texel_size.to_f64();
         Origin {
             triangle: from.triangle,
             element: Element {
                 cell: from.texel,
                 index: from.part.index(),
             },
-            leaves_up,
-            texel_point: [from.hit.u.to_f64() / size, from.hit.v.to_f64() / size],
+            touch,
+            seam,
         }
     }
 }

@@ -111,7 +111,9 @@ impl<T: Real> DisplacedSurface<T> {
                 let texel = [hit.u, hit.v]
                     .map(|c| crate::tlas::texel_floor((c / self.texel_size).to_f64()));
                 let part = TexelPart::Wall { edge: k as u8 };
-                if excluded.is_some_and(|e| e.excludes(texel, part.index())) {
+                if excluded.is_some_and(|e| {
+                    e.excludes(texel, part.index()) || e.skips_wall(seam, t.to_f64())
+                }) {
                     continue;
                 }
                 t_max = t;

@@ -200,8 +200,8 @@ impl<T: Real> ShellHit<T> {
                 cell: self.tile,
                 index: self.object_triangle,
             },
-            leaves_up: None,
-            texel_point: [f64::NAN; 2],
+            touch: None,
+            seam: None,
         }
     }
 }

@@ -2,7 +2,7 @@
 //! microtriangles, watertight along the texel's edges and the base triangle's (the piece
 //! search of `DisplacedSurface::intersect_texel`).
 
-use nlrt_poly::{QuadraticBatch, Real, Vector2, decided_sign, solve_cubic_in, solve_quadratic_in};
+use nlrt_poly::{QuadraticBatch, Real, decided_sign, solve_cubic_in, solve_quadratic_in};
 use nlrt_shellmap::{
     BaseEdges, Hit, NonlinearRay, Prism, TextureCurve, alpha_beta_eq11, piece_clear_in_f64,
     planes_agree_in_f64, root_decidedly_outside_in_f64,
@@ -135,12 +135,9 @@ impl<T: Real> DisplacedSurface<T> {
 
         // A ray leaving the surface does not hit its own element, nor touch a neighbour at
         // its origin (`Exclusion::skips`).
-        let skipped = |part: TexelPart, abh: &[C; 4], point: [C; 3]| {
+        let skipped = |part: TexelPart, abh: &[C; 4], point: [C; 3], t: C| {
             excluded.is_some_and(|e| {
-                let uv = prism.texture_uv(point[0], point[1]);
-                let size = self.texel_size.to_f64();
-                let at = [uv.x().to_f64() / size, uv.y().to_f64() / size];
-                e.skips([x, y], part.index(), at, || {
+                e.skips([x, y], part.index(), t.to_f64(), || {
                     up_crossing(prism, abh, point, ray.ray.dir)
                 })
             })
@@ -158,7 +155,7 @@ impl<T: Real> DisplacedSurface<T> {
             // error outside, so clamp it onto the base triangle.
             let (alpha, beta) = nlrt_shellmap::onto_base_triangle(alpha, beta);
             let t = ray.signed_distance(prism, alpha, beta, h);
-            if t >= t_min && t <= *t_max && !skipped(part, abh, [alpha, beta, h]) {
+            if t >= t_min && t <= *t_max && !skipped(part, abh, [alpha, beta, h], t) {
                 *t_max = t;
                 best = Some((Hit::at(prism, t, alpha, beta, h), part));
             }
@@ -313,7 +310,7 @@ impl<T: Real> DisplacedSurface<T> {
                 let (cubic, abh, part, plane) = side(lower);
                 if a == C::ZERO
                     && let Some(hit) = floor_hit(b, t_max)
-                    && !skipped(part, abh, [hit.alpha, hit.beta, C::ZERO])
+                    && !skipped(part, abh, [hit.alpha, hit.beta, C::ZERO], hit.t)
                 {
                     t_max = hit.t;
                     floor = Some((hit, part));

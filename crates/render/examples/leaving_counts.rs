@@ -103,8 +103,13 @@ struct Secondary<T: Real> {
     dir: T::Vec3,
 }
 
-/// Whether `ray` is blocked, leaving `s.from` as `start` says.
-fn blocked<T: Real>(nl: &Nonlinear<T>, s: &Secondary<T>, start: Start) -> bool {
+/// Whether `ray` is blocked, leaving `s.from` as `start` says; adds to `stats`.
+fn blocked<T: Real>(
+    nl: &Nonlinear<T>,
+    s: &Secondary<T>,
+    start: Start,
+    stats: &mut TraversalStats,
+) -> bool {
     let origin = if start == Start::Offset {
         s.offset_point
     } else {
@@ -113,7 +118,6 @@ fn blocked<T: Real>(nl: &Nonlinear<T>, s: &Secondary<T>, start: Start) -> bool {
     let Some(ray) = Ray::new(origin, s.dir) else {
         return false;
     };
-    let stats = &mut TraversalStats::default();
     let inf = T::INFINITY;
     match (nl, start, &s.from) {
         (Nonlinear::Displaced(d), Start::Leaving, Found::Displaced(h)) => {
@@ -204,7 +208,7 @@ fn main() {
     }
     let reference: Vec<bool> = wide_rays
         .iter()
-        .map(|s| blocked(&wide, s, Start::Leaving))
+        .map(|s| blocked(&wide, s, Start::Leaving, &mut TraversalStats::default()))
         .collect();
     println!(
         "{name} ({}), {width} x {height} camera rays, {} secondary rays (shadow and bounce) from hits on the same element in f32 and f64 ({differing_primaries} camera rays hit different elements, left out); offset {offset:.3e}; reference: f64 leaving, {} blocked",
@@ -213,7 +217,7 @@ fn main() {
         reference.iter().filter(|&&b| b).count(),
     );
     println!(
-        "variant | blocked where the reference is open | open where it is blocked | us per ray (one thread)"
+        "variant | blocked where the reference is open | open where it is blocked | us per ray (one thread) | per ray: prisms | nodes | texel tests"
     );
     let starts = [
         ("offset", Start::Offset),
@@ -222,18 +226,24 @@ fn main() {
     ];
     let mut seconds = vec![Vec::new(); 2 * starts.len()];
     let mut answers = vec![Vec::new(); 2 * starts.len()];
+    let mut stats = vec![TraversalStats::default(); 2 * starts.len()];
     for _ in 0..ROUNDS {
         for (i, &(_, start)) in starts.iter().enumerate() {
+            let j = starts.len() + i;
+            stats[i] = TraversalStats::default();
             let t = Instant::now();
             answers[i] = narrow_rays
                 .iter()
-                .map(|s| blocked(&narrow, s, start))
+                .map(|s| blocked(&narrow, s, start, &mut stats[i]))
                 .collect();
             seconds[i].push(t.elapsed().as_secs_f64());
+            stats[j] = TraversalStats::default();
             let t = Instant::now();
-            answers[starts.len() + i] =
-                wide_rays.iter().map(|s| blocked(&wide, s, start)).collect();
-            seconds[starts.len() + i].push(t.elapsed().as_secs_f64());
+            answers[j] = wide_rays
+                .iter()
+                .map(|s| blocked(&wide, s, start, &mut stats[j]))
+                .collect();
+            seconds[j].push(t.elapsed().as_secs_f64());
         }
     }
     let n = wide_rays.len().max(1) as f64;
@@ -246,8 +256,11 @@ fn main() {
                 leaks += usize::from(!a && r);
             }
             println!(
-                "{precision} {label} | {false_blocks} | {leaks} | {:.3}",
-                median(seconds[j].clone()) / n * 1e6
+                "{precision} {label} | {false_blocks} | {leaks} | {:.3} | {:.2} | {:.2} | {:.2}",
+                median(seconds[j].clone()) / n * 1e6,
+                f64::from(stats[j].prism_tests) / n,
+                f64::from(stats[j].box_tests) / n,
+                f64::from(stats[j].texel_tests) / n,
             );
         }
     }

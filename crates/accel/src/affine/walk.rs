@@ -444,20 +444,15 @@ impl<T: Real> Walk<'_, T> {
             // (`Exclusion::skips`): the line's climb above the plane through the three
             // corners, `d/dt (h - H(u, v))`, from the plane's slopes along u and v.
             if self.excluded.is_some_and(|e| {
-                e.skips(
-                    [x, y],
-                    u32::from(part),
-                    [q[0].to_f64(), q[1].to_f64()],
-                    || {
-                        let (slope_u, slope_v) = if k == 3 {
-                            (h[1] - h[0], h[3] - h[1])
-                        } else {
-                            (h[3] - h[2], h[2] - h[0])
-                        };
-                        let d = self.line.dir;
-                        d[2] - slope_u * d[0] - slope_v * d[1]
-                    },
-                )
+                e.skips([x, y], u32::from(part), (self.t0 + t).to_f64(), || {
+                    let (slope_u, slope_v) = if k == 3 {
+                        (h[1] - h[0], h[3] - h[1])
+                    } else {
+                        (h[3] - h[2], h[2] - h[0])
+                    };
+                    let d = self.line.dir;
+                    d[2] - slope_u * d[0] - slope_v * d[1]
+                })
             }) {
                 continue;
             }
