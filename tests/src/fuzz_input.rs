@@ -433,6 +433,26 @@ pub fn fuzz_displacement<T: Real>(data: &[u8]) {
         fast.is_some(),
         "occlusion query against {fast:?}"
     );
+    // A ray leaving the hit back towards the ray's origin: no panic, any hit finite, ahead
+    // and not the element it leaves, and the occlusion query agreeing with it.
+    if let Some(hit) = fast
+        && let Some(back) = nlrt_shellmap::Ray::new(ray.at(hit.hit.t), -ray.dir)
+    {
+        let stats = &mut TraversalStats::default();
+        let left = surface.intersect_leaving(&back, &hit, hit.hit.t, stats);
+        if let Some(l) = left {
+            assert!(l.hit.t.is_finite() && l.hit.t >= T::ZERO, "leaving {l:?}");
+            assert!(
+                (l.triangle, l.texel, l.part) != (hit.triangle, hit.texel, hit.part),
+                "leaving {hit:?} hit it again: {l:?}"
+            );
+        }
+        assert_eq!(
+            surface.occluded_leaving(&back, &hit, hit.hit.t, stats),
+            left.is_some(),
+            "leaving occlusion query against {left:?}"
+        );
+    }
     let [x0, y0, x1, y1] = surface.roots(0).texels.map(i64::from);
     // The brute force tests every texel in the walk's arithmetic: not comparable where the
     // walk met a decision `f32` could not make and traced the prism in `f64`.
@@ -772,6 +792,27 @@ pub fn fuzz_shell<T: Real>(data: &[u8]) {
         fast.is_some(),
         "occlusion query against {fast:?}"
     );
+    // A ray leaving the hit back towards the ray's origin: no panic, any hit finite, ahead
+    // and not the triangle it leaves, and the occlusion query agreeing with it.
+    if let Some(hit) = fast
+        && let Some(back) = nlrt_shellmap::Ray::new(ray.at(hit.hit.t), -ray.dir)
+    {
+        let stats = &mut TraversalStats::default();
+        let left = surface.intersect_leaving(&back, &hit, hit.hit.t, stats);
+        if let Some(l) = left {
+            assert!(l.hit.t.is_finite() && l.hit.t >= T::ZERO, "leaving {l:?}");
+            assert!(
+                (l.triangle, l.tile, l.object_triangle)
+                    != (hit.triangle, hit.tile, hit.object_triangle),
+                "leaving {hit:?} hit it again: {l:?}"
+            );
+        }
+        assert_eq!(
+            surface.occluded_leaving(&back, &hit, hit.hit.t, stats),
+            left.is_some(),
+            "leaving occlusion query against {left:?}"
+        );
+    }
     if let Some(hit) = fast {
         let h = hit.hit;
         check_traversal_hit(&h, &hit);
