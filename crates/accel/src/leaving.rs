@@ -178,7 +178,7 @@ pub(crate) fn texel_length<T: Real>(prism: &Prism<T>, h: T, texel_size: f64) -> 
     for (i, j) in [(0, 1), (1, 2), (2, 0)] {
         let world = (prism.vertex(j, h) - prism.vertex(i, h)).length().to_f64();
         let duv = prism.uv[j] - prism.uv[i];
-        let uv = duv.x().to_f64().hypot(duv.y().to_f64());
+        let uv = duv.x().mul_add(duv.x(), duv.y() * duv.y()).sqrt().to_f64();
         if uv > 0.0 {
             longest = longest.max(world / uv);
         }
