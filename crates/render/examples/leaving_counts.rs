@@ -131,12 +131,6 @@ fn blocked<T: Real>(
     }
 }
 
-/// Median of `xs`.
-fn median(mut xs: Vec<f64>) -> f64 {
-    xs.sort_by(f64::total_cmp);
-    xs.get(xs.len() / 2).copied().unwrap_or(f64::NAN)
-}
-
 fn main() {
     let args: Vec<String> = std::env::args().collect();
     let (name, scene) = common::scene_from_args(&args, PROGRAM);
@@ -257,7 +251,7 @@ fn main() {
             }
             println!(
                 "{precision} {label} | {false_blocks} | {leaks} | {:.3} | {:.2} | {:.2} | {:.2}",
-                median(seconds[j].clone()) / n * 1e6,
+                common::median(seconds[j].clone()) / n * 1e6,
                 f64::from(stats[j].prism_tests) / n,
                 f64::from(stats[j].box_tests) / n,
                 f64::from(stats[j].texel_tests) / n,

@@ -62,12 +62,6 @@ fn trace_stream<T: Real>(
     (hits, stats)
 }
 
-/// Median of `xs` (NaN when empty: a precision left out).
-fn median(mut xs: Vec<f64>) -> f64 {
-    xs.sort_by(f64::total_cmp);
-    xs.get(xs.len() / 2).copied().unwrap_or(f64::NAN)
-}
-
 fn main() {
     let args: Vec<String> = std::env::args().collect();
     let (name, scene) = common::scene_from_args(&args, PROGRAM);
@@ -155,7 +149,7 @@ fn main() {
                 seconds[i].push(t.elapsed().as_secs_f64());
             }
         }
-        let medians: Vec<f64> = seconds.into_iter().map(median).collect();
+        let medians: Vec<f64> = seconds.into_iter().map(common::median).collect();
         let n = rays.len() as f64;
         for (i, (variant, _)) in variants.iter().enumerate() {
             let Some((hits, st)) = results[i] else {

@@ -1,5 +1,6 @@
 //! Command-line helpers shared by the traversal examples (`traversal_counts`,
-//! `stream_counts`): a built-in scene by name and map size, a width, and the exit-2 message.
+//! `stream_counts`, `leaving_counts`): a built-in scene by name and map size, a width, the
+//! exit-2 message, and the median of timed rounds.
 
 use nlrt_render::scene::scenes::{Scene, Size, builtin};
 
@@ -31,4 +32,13 @@ pub fn width_from_args(args: &[String], index: usize, default: usize, program: &
         Some(Ok(w)) if (4..=4096).contains(&w) => w,
         Some(_) => fail(program, "pixels per row: a number from 4 to 4096"),
     }
+}
+
+/// Median of `xs` (NaN when empty: a variant left out).
+// `traversal_counts` times no rounds.
+#[allow(dead_code)]
+#[must_use]
+pub fn median(mut xs: Vec<f64>) -> f64 {
+    xs.sort_by(f64::total_cmp);
+    xs.get(xs.len() / 2).copied().unwrap_or(f64::NAN)
 }
