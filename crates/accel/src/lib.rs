@@ -54,6 +54,7 @@ mod cells;
 mod displacement;
 mod heightfield;
 mod leaving;
+mod leaving_queries;
 mod mesh;
 mod object_edges;
 mod pose;

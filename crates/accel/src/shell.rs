@@ -15,7 +15,7 @@ use nlrt_shellmap::{
 use crate::affine::{AffinePatches, Walk, walk_straight_tiles};
 use crate::bvh::{Aabb, Bvh4};
 use crate::cells::{CURVE_STACK, CellSize, walk_cells};
-use crate::leaving::{Element, Exclusion, Origin};
+use crate::leaving::{Exclusion, Origin};
 use crate::mesh::{BaseMesh, MeshError};
 use crate::object_edges::ObjectEdges;
 use crate::pose::{PoseUpdate, TlasUpdate};
@@ -188,22 +188,6 @@ pub struct ShellHit<T: Real> {
     pub tile: [i32; 2],
     /// Object triangle (index into [`ShellObject::triangles`]).
     pub object_triangle: u32,
-}
-
-impl<T: Real> ShellHit<T> {
-    /// The element hit, as a ray leaving it excludes it.
-    #[must_use]
-    pub(crate) fn origin(&self) -> Origin {
-        Origin {
-            triangle: self.triangle,
-            element: Element {
-                cell: self.tile,
-                index: self.object_triangle,
-            },
-            touch: None,
-            seam: None,
-        }
-    }
 }
 
 /// A base mesh whose shell holds an object tiled `tiling x tiling` times per unit of uv.
@@ -748,49 +732,9 @@ impl<T: Real> ShellSurface<T> {
             .is_some()
     }
 
-    /// The nearest hit of a ray that leaves the object where it was hit at `from` (a bounce
-    /// ray): `ray` starts at `from`'s point as the caller computed it, with no offset, and
-    /// `from`'s object triangle in its tile is excluded by its id (`crate::leaving`), so that
-    /// the ray cannot hit the triangle it starts on. Distances in `[0, t_max]`.
-    pub fn intersect_leaving(
-        &self,
-        ray: &Ray<T>,
-        from: &ShellHit<T>,
-        t_max: T,
-        stats: &mut TraversalStats,
-    ) -> Option<ShellHit<T>> {
-        let origin = from.origin();
-        self.walk_tlas(ray, [T::ZERO, t_max], Query::Nearest, Some(&origin), stats)
-    }
-
-    /// Whether a ray leaving the object at `from` meets it at a distance in `[0, t_max]` (a
-    /// shadow ray): [`ShellSurface::intersect_leaving`] as an occlusion query.
-    pub fn occluded_leaving(
-        &self,
-        ray: &Ray<T>,
-        from: &ShellHit<T>,
-        t_max: T,
-        stats: &mut TraversalStats,
-    ) -> bool {
-        let origin = from.origin();
-        self.walk_tlas(ray, [T::ZERO, t_max], Query::Any, Some(&origin), stats)
-            .is_some()
-    }
-
-    /// [`ShellSurface::intersect_leaving`] by brute force (the reference for tests).
-    #[must_use]
-    pub fn intersect_leaving_brute_force(
-        &self,
-        ray: &Ray<T>,
-        from: &ShellHit<T>,
-        t_max: T,
-    ) -> Option<ShellHit<T>> {
-        self.brute_force(ray, [T::ZERO, t_max], Some(&from.origin()))
-    }
-
     /// The TLAS walk of [`ShellSurface::intersect`], [`ShellSurface::occluded`] and their
     /// leaving forms (`origin`: the element the ray leaves).
-    fn walk_tlas(
+    pub(crate) fn walk_tlas(
         &self,
         ray: &Ray<T>,
         [t_min, t_max]: [T; 2],
@@ -869,7 +813,7 @@ impl<T: Real> ShellSurface<T> {
     }
 
     /// [`ShellSurface::intersect_brute_force`] with the element `origin` excluded.
-    fn brute_force(
+    pub(crate) fn brute_force(
         &self,
         ray: &Ray<T>,
         [t_min, t_max]: [T; 2],
