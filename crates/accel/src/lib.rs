@@ -57,6 +57,7 @@ mod leaving;
 mod leaving_queries;
 mod mesh;
 mod object_edges;
+mod object_hull;
 mod pose;
 mod precision;
 mod seam;

@@ -18,6 +18,7 @@ use crate::cells::{CURVE_STACK, CellSize, walk_cells};
 use crate::leaving::{Exclusion, Origin};
 use crate::mesh::{BaseMesh, MeshError};
 use crate::object_edges::ObjectEdges;
+use crate::object_hull::PrismHull;
 use crate::pose::{PoseUpdate, TlasUpdate};
 use crate::precision::{PrismSearch, Search};
 use crate::stack::SpillStack;
@@ -203,6 +204,19 @@ pub struct ShellSurface<T: Real> {
     straight_walk: bool,
 }
 
+/// What the object's BVH is walked with in every tile of one prism: the base triangle, its
+/// prism, the ray's curve in it, the hull test where the prism has one, the least distance
+/// and the element a leaving ray excludes.
+#[derive(Clone, Copy)]
+struct TileQuery<'a, 'c, C: Real> {
+    tri: usize,
+    prism: &'a Prism<C>,
+    curve: &'a TextureCurve<'c, C>,
+    hull: Option<&'a PrismHull<C>>,
+    t_min: C,
+    excluded: Option<Exclusion>,
+}
+
 /// Inline entries of the object-BVH stack: a 4-ary walk holds at most 3 per level, so this
 /// covers trees 10 levels deep (a million leaves); deeper walks spill to the heap.
 const OBJECT_STACK: usize = 31;
@@ -374,22 +388,20 @@ impl<T: Real> ShellSurface<T> {
         )
     }
 
-    /// The object's BVH in tile `(x, y)` along `curve` (set up once per prism), nearest
-    /// first, its boxes cut to the heights `h` at which the curve is in the tile (from the
-    /// walk: a box's part outside them is outside the tile or the prism, so the box test's
-    /// cheap interval rejection sees only the short stretch of curve that matters); updates
-    /// `best`.
-    #[allow(clippy::too_many_arguments)]
+    /// The object's BVH in tile `(x, y)` along the prism's curve, nearest first, its boxes
+    /// cut to the heights `h` at which the curve is in the tile (from the walk: a box's part
+    /// outside them is outside the tile or the prism); updates `best` and `t_max`.
+    ///
+    /// A box is entered where the world ray meets the hull of its mapped corners
+    /// ([`PrismHull`], a slab test in the prism's frame, four boxes in one vector step);
+    /// where the prism has no hull test (a base triangle degenerate in uv or in space), where
+    /// the curve clipped in texture space meets it ([`TextureCurve::box_span_in`]).
     fn intersect_tile<C: Real>(
         &self,
-        tri: usize,
-        prism: &Prism<C>,
-        curve: &TextureCurve<'_, C>,
+        query: &TileQuery<'_, '_, C>,
         (x, y): (i32, i32),
         [h_in, h_out]: [C; 2],
-        t_min: C,
         t_max: &mut C,
-        excluded: Option<Exclusion>,
         best: &mut Option<ShellHit<C>>,
         stats: &mut TraversalStats,
     ) {
@@ -398,15 +410,27 @@ impl<T: Real> ShellSurface<T> {
         if nodes.is_empty() {
             return;
         }
+        let TileQuery {
+            tri,
+            prism,
+            curve,
+            hull,
+            t_min,
+            excluded,
+        } = *query;
         let (dx, dy) = (T::from_i32(x), T::from_i32(y));
         let ray = curve.ray();
-        // The curve's uv enclosure over a node's heights (the tile's for the root; for a box,
-        // the one its own test formed) holds the curve over its children's heights, which lie
-        // within them: a child whose uv rectangle misses it is rejected by four comparisons,
-        // before its own, tighter enclosure is formed (three divisions). Sound as the box
-        // test's rejection is (`TextureCurve::uv_enclosure`); a node whose enclosure does not
-        // exist (the denominator may vanish) hands down its parent's.
-        let tile_enclosure = curve.uv_enclosure(h_in, h_out);
+        // Without a hull: the curve's uv enclosure over a node's heights (the tile's for the
+        // root; for a box, the one its own test formed) holds the curve over its children's
+        // heights, which lie within them: a child whose uv rectangle misses it is rejected by
+        // four comparisons, before its own, tighter enclosure is formed (three divisions).
+        // Sound as the box test's rejection is (`TextureCurve::uv_enclosure`); a node whose
+        // enclosure does not exist (the denominator may vanish) hands down its parent's.
+        let tile_enclosure = if hull.is_none() {
+            curve.uv_enclosure(h_in, h_out)
+        } else {
+            None
+        };
         let mut stack = SpillStack::<_, OBJECT_STACK>::new((0u32, C::ZERO, None));
         stack.push((0, t_min, tile_enclosure));
         while let Some((node, entry, node_enclosure)) = stack.pop() {
@@ -418,52 +442,36 @@ impl<T: Real> ShellSurface<T> {
             // box holds its triangles' placed vertices (rounding is monotonic), then widened;
             // heights cut to the tile's.
             let w = |v: T| C::from_f64(v.to_f64());
-            let boxes: [([C; 3], [C; 3]); 4] = core::array::from_fn(|c| {
+            let (mut lo, mut hi) = ([[C::ZERO; 4]; 3], [[C::ZERO; 4]; 3]);
+            for c in 0..4 {
                 let b = node.bounds(c);
-                (
-                    [w(b.lo[0] + dx), w(b.lo[1] + dy), w(b.lo[2]).max(h_in)],
-                    [w(b.hi[0] + dx), w(b.hi[1] + dy), w(b.hi[2]).min(h_out)],
-                )
-            });
-            // Their uv enclosures in one vector step (an unused slot or an empty height
-            // range takes the tile's bottom, a finite interval whose enclosure is not used).
-            let heights = |c: usize, end: usize| {
-                let (lo, hi) = (boxes[c].0[2], boxes[c].1[2]);
-                if Bvh4::is_used(node, c) && lo <= hi {
-                    [lo, hi][end]
-                } else {
-                    h_in
+                [lo[0][c], lo[1][c], lo[2][c]] =
+                    [w(b.lo[0] + dx), w(b.lo[1] + dy), w(b.lo[2]).max(h_in)];
+                [hi[0][c], hi[1][c], hi[2][c]] =
+                    [w(b.hi[0] + dx), w(b.hi[1] + dy), w(b.hi[2]).min(h_out)];
+            }
+            let used = node.used();
+            stats.box_tests += used.count_ones();
+            let (t_in, met, enclosures) = match hull {
+                Some(hull) => {
+                    let (t_in, met) = hull.entries(lo, hi, used, t_min, *t_max);
+                    (t_in, met, [None; 4])
                 }
+                None => Self::curve_entries(curve, node_enclosure, lo, hi, used, t_min, *t_max),
             };
-            let enclosures = curve.uv_enclosures(
-                core::array::from_fn(|c| heights(c, 0)),
-                core::array::from_fn(|c| heights(c, 1)),
-            );
             let mut found: [(C, usize, Option<[C; 4]>); 4] = [(C::ZERO, 0, None); 4];
             let mut n = 0;
-            for (c, &(lo, hi)) in boxes.iter().enumerate() {
-                if !Bvh4::is_used(node, c) {
+            for c in 0..4 {
+                if met >> c & 1 == 0 {
                     continue;
                 }
-                stats.box_tests += 1;
-                if let Some([u_lo, u_hi, v_lo, v_hi]) = node_enclosure
-                    && (u_hi < lo[0] || u_lo > hi[0] || v_hi < lo[1] || v_lo > hi[1])
-                {
-                    continue;
+                let mut i = n;
+                while i > 0 && found[i - 1].0 > t_in[c] {
+                    found[i] = found[i - 1];
+                    i -= 1;
                 }
-                if !(lo[2] <= hi[2]) {
-                    continue;
-                }
-                let enclosure = enclosures[c];
-                if let Some(span) = curve.box_span_in(enclosure, lo, hi, t_min, *t_max) {
-                    let mut i = n;
-                    while i > 0 && found[i - 1].0 > span.t_in {
-                        found[i] = found[i - 1];
-                        i -= 1;
-                    }
-                    found[i] = (span.t_in, c, enclosure.or(node_enclosure));
-                    n += 1;
-                }
+                found[i] = (t_in[c], c, enclosures[c].or(node_enclosure));
+                n += 1;
             }
             for &(t, c, _) in found[..n].iter() {
                 if node.count[c] > 0 && t <= *t_max {
@@ -500,6 +508,51 @@ impl<T: Real> ShellSurface<T> {
                 }
             }
         }
+    }
+
+    /// The curve's box test of four boxes (`lo`, `hi` by axis and child; `used` the slots to
+    /// test): their uv enclosures in one vector step, each box rejected by the parent's
+    /// enclosure or clipped by [`TextureCurve::box_span_in`]; the entry distances, the
+    /// entered boxes as bits, and each entered box's enclosure for its children.
+    #[allow(clippy::type_complexity)]
+    fn curve_entries<C: Real>(
+        curve: &TextureCurve<'_, C>,
+        node_enclosure: Option<[C; 4]>,
+        lo: [[C; 4]; 3],
+        hi: [[C; 4]; 3],
+        used: u8,
+        t_min: C,
+        t_max: C,
+    ) -> ([C; 4], u8, [Option<[C; 4]>; 4]) {
+        // An unused slot or an empty height range takes the tile's bottom (any finite
+        // interval: its enclosure is not used).
+        let live = |c: usize| used >> c & 1 == 1 && lo[2][c] <= hi[2][c];
+        let bottom = lo[2].iter().copied().fold(C::INFINITY, C::min);
+        let heights = |c: usize, end: [[C; 4]; 3]| if live(c) { end[2][c] } else { bottom };
+        let enclosures = curve.uv_enclosures(
+            core::array::from_fn(|c| heights(c, lo)),
+            core::array::from_fn(|c| heights(c, hi)),
+        );
+        let (mut t_in, mut met) = ([C::ZERO; 4], 0u8);
+        for c in 0..4 {
+            if !live(c) {
+                continue;
+            }
+            if let Some([u_lo, u_hi, v_lo, v_hi]) = node_enclosure
+                && (u_hi < lo[0][c] || u_lo > hi[0][c] || v_hi < lo[1][c] || v_lo > hi[1][c])
+            {
+                continue;
+            }
+            let (l, h) = (
+                [lo[0][c], lo[1][c], lo[2][c]],
+                [hi[0][c], hi[1][c], hi[2][c]],
+            );
+            if let Some(span) = curve.box_span_in(enclosures[c], l, h, t_min, t_max) {
+                t_in[c] = span.t_in;
+                met |= 1 << c;
+            }
+        }
+        (t_in, met, enclosures)
     }
 
     /// The nearest hit of `ray` in base triangle `tri` with `t` in `[t_min, t_max]` along its
@@ -877,6 +930,15 @@ impl<T: Real> PrismSearch<T> for ShellSurface<T> {
             Search::Walk => {
                 let [h_lo, h_hi] = self.object.h_range.map(|h| C::from_f64(h.to_f64()));
                 let curve = TextureCurve::new(prism, ray);
+                let hull = PrismHull::new(prism, &ray.ray, h_hi);
+                let query = TileQuery {
+                    tri,
+                    prism,
+                    curve: &curve,
+                    hull: hull.as_ref(),
+                    t_min,
+                    excluded,
+                };
                 walk_cells::<C, CURVE_STACK>(
                     self.prisms.roots(tri),
                     prism,
@@ -889,18 +951,7 @@ impl<T: Real> PrismSearch<T> for ShellSurface<T> {
                     |_, _, _| [h_lo, h_hi],
                     |x, y, h, t_max, stats| {
                         let mut t = t_max;
-                        self.intersect_tile(
-                            tri,
-                            prism,
-                            &curve,
-                            (x, y),
-                            h,
-                            t_min,
-                            &mut t,
-                            excluded,
-                            &mut best,
-                            stats,
-                        );
+                        self.intersect_tile(&query, (x, y), h, &mut t, &mut best, stats);
                         (t < t_max).then_some(t)
                     },
                 );
