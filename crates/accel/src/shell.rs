@@ -476,8 +476,15 @@ impl<T: Real> ShellSurface<T> {
             for &(t, c, _) in found[..n].iter() {
                 if node.count[c] > 0 && t <= *t_max {
                     let first = node.index[c] as usize;
-                    for &k in &order[first..first + node.count[c] as usize] {
-                        if excluded.is_some_and(|e| e.excludes([x, y], k)) {
+                    let leaf = &order[first..first + node.count[c] as usize];
+                    let met = match hull {
+                        Some(hull) if leaf.len() > 1 => {
+                            self.triangles_met(hull, leaf, [x, y], [h_in, h_out], t_min, *t_max)
+                        }
+                        _ => u8::MAX,
+                    };
+                    for (i, &k) in leaf.iter().enumerate() {
+                        if met >> i & 1 == 0 || excluded.is_some_and(|e| e.excludes([x, y], k)) {
                             continue;
                         }
                         stats.texel_tests += 1;
@@ -508,6 +515,35 @@ impl<T: Real> ShellSurface<T> {
                 }
             }
         }
+    }
+
+    /// Which of a leaf's (at most four) object triangles `leaf`, placed in the tile at
+    /// `(x, y)` as the object test places them, the ray may meet: bit `i` where the hull of
+    /// triangle `leaf[i]`'s own box, cut to the tile's heights, is entered within
+    /// `[t_min, t_max]` (the leaf's box is the union of up to four of them).
+    fn triangles_met<C: Real>(
+        &self,
+        hull: &PrismHull<C>,
+        leaf: &[u32],
+        [x, y]: [i32; 2],
+        [h_in, h_out]: [C; 2],
+        t_min: C,
+        t_max: C,
+    ) -> u8 {
+        let (mut lo, mut hi) = ([[C::ZERO; 4]; 3], [[C::ZERO; 4]; 3]);
+        let mut slots = 0u8;
+        for (i, &k) in leaf.iter().take(4).enumerate() {
+            let placed = Self::shifted(&self.object.triangles[k as usize], x, y);
+            for a in 0..3 {
+                let values = placed.map(|p| C::from_f64(p.get(a).to_f64()));
+                lo[a][i] = values[0].min(values[1]).min(values[2]);
+                hi[a][i] = values[0].max(values[1]).max(values[2]);
+            }
+            lo[2][i] = lo[2][i].max(h_in);
+            hi[2][i] = hi[2][i].min(h_out);
+            slots |= 1 << i;
+        }
+        hull.entries(lo, hi, slots, t_min, t_max).1 | !((1u8 << leaf.len().min(4)) - 1)
     }
 
     /// The curve's box test of four boxes (`lo`, `hi` by axis and child; `used` the slots to
