@@ -77,6 +77,9 @@ impl fmt::Display for DisplacementError {
     }
 }
 
+/// A plain error (no source): `?` carries it into `Box<dyn core::error::Error>`.
+impl core::error::Error for DisplacementError {}
+
 /// The side walls over the base edges as planes in canonical coordinates
 /// `(n_alpha, n_beta, n_h, K)` (Eq. 10): `alpha = 0`, `beta = 0`, `alpha + beta = 1`.
 pub(crate) const WALL_PLANES: [[i32; 4]; 3] = [[1, 0, 0, 0], [0, 1, 0, 0], [1, 1, 0, -1]];
@@ -128,6 +131,29 @@ pub struct SurfaceHit<T: Real> {
 
 /// A displacement-mapped mesh: base mesh, height field, height scale and tiling, with the
 /// TLAS over its prisms and the per-triangle roots into the height field's pyramid.
+///
+/// The surface is two-sided: a ray from below the displaced sheet hits it from below (the
+/// base triangle itself is no surface). An edge two triangles share is watertight; on an
+/// open outer border nothing lies beyond the edge, and a ray exactly on it may hit or miss.
+///
+/// ```
+/// use nlrt_accel::glam::{DVec2, DVec3};
+/// use nlrt_accel::{BaseMesh, DisplacedSurface, HeightField, Ray, TraversalStats, Wrap};
+/// // The unit square displaced by 0.5 everywhere: a sheet at z = 0.5.
+/// let p = vec![DVec3::ZERO, DVec3::X, DVec3::new(1.0, 1.0, 0.0), DVec3::Y];
+/// let uv = p.iter().map(|p| DVec2::new(p.x, p.y)).collect();
+/// let mesh = BaseMesh::new(p, vec![DVec3::Z; 4], uv, vec![[0, 1, 2], [0, 2, 3]]).unwrap();
+/// let field = HeightField::new(4, 4, vec![u16::MAX; 16], Wrap::Clamp).unwrap();
+/// let surface = DisplacedSurface::new(mesh, field, 0.5, 1.0).unwrap();
+/// let first = |o: DVec3, d: DVec3| {
+///     let ray = Ray::new(o, d).unwrap();
+///     surface.intersect(&ray, 0.0, f64::INFINITY, &mut TraversalStats::default())
+/// };
+/// // From below the base, up through it: the sheet's underside at z = 0.5.
+/// assert_eq!(first(DVec3::new(0.3, 0.6, -1.0), DVec3::Z).unwrap().hit.t, 1.5);
+/// // Down beside the border: a miss.
+/// assert!(first(DVec3::new(1.0 + 1e-9, 0.5, 2.0), -DVec3::Z).is_none());
+/// ```
 #[derive(Clone, Debug)]
 pub struct DisplacedSurface<T: Real> {
     pub(crate) prisms: PrismTlas<T>,
@@ -447,11 +473,38 @@ impl<T: Real> DisplacedSurface<T> {
         self.field.memory_bytes() + self.prisms.memory_bytes() + self.straight.memory_bytes()
     }
 
-    /// The uv side of one texel (`1 / side` of the map): texture coordinates divided by it
-    /// are texel coordinates.
+    /// The side of one cell of the tracers' square texel grid, `1 / grid_side`
+    /// ([`HeightField::grid_side`]), in the grid's own coordinates: texture coordinates times
+    /// the tiling and [`HeightField::grid_scale`], divided by it, are grid coordinates. On a
+    /// square power-of-two map these are the map's texels in uv (times the tiling); on any
+    /// other map the texel of the map in uv is [`DisplacedSurface::texel_uv_size`].
     #[must_use]
     pub fn texel_size(&self) -> T {
         self.texel_size
+    }
+
+    /// The uv extent of one texel of the height map, per axis: `1 / (width * tiling)` and
+    /// `1 / (height * tiling)`, what [`SurfaceHit::texel`] counts (texel `(i, j)` spans
+    /// `[i, i + 1] x [j, j + 1]` times this).
+    ///
+    /// ```
+    /// use nlrt_accel::glam::{DVec2, DVec3};
+    /// use nlrt_accel::{BaseMesh, DisplacedSurface, HeightField, Wrap};
+    /// let p = vec![DVec3::ZERO, DVec3::X, DVec3::new(1.0, 1.0, 0.0), DVec3::Y];
+    /// let uv = p.iter().map(|p| DVec2::new(p.x, p.y)).collect();
+    /// let mesh = BaseMesh::new(p, vec![DVec3::Z; 4], uv, vec![[0, 1, 2], [0, 2, 3]]).unwrap();
+    /// let field = HeightField::new(300, 200, vec![0; 300 * 200], Wrap::Clamp).unwrap();
+    /// let surface = DisplacedSurface::new(mesh, field, 0.1, 2.0).unwrap();
+    /// assert_eq!(surface.texel_uv_size(), [1.0 / 600.0, 1.0 / 400.0]);
+    /// ```
+    #[must_use]
+    pub fn texel_uv_size(&self) -> [T; 2] {
+        // uvs times `uv_scale` (the tiling times the map's share of the grid) times the grid
+        // side are texel coordinates.
+        let side = self.field.grid_side() as f64;
+        self.prisms
+            .uv_scale
+            .map(|scale| T::from_f64(1.0 / (scale.to_f64() * side)))
     }
 
     /// TLAS traversal over the prisms (conservative slab tests, nearest first):

@@ -65,6 +65,9 @@ impl fmt::Display for HeightMapError {
     }
 }
 
+/// A plain error (no source): `?` carries it into `Box<dyn core::error::Error>`.
+impl core::error::Error for HeightMapError {}
+
 /// Largest 16-bit sample; heights are `sample / HEIGHT_ONE`.
 pub const HEIGHT_ONE: u16 = u16::MAX;
 
@@ -81,6 +84,27 @@ struct Level {
 }
 
 /// A height map of 16-bit samples with its min-max pyramid.
+///
+/// Sample `(i, j)` (row `j`, column `i`, `v` down the rows) sits at the texel *corner*
+/// `(u, v) = (i / width, j / height)` of a tile, not at `i / (width - 1)`: texel `(x, y)` spans
+/// the corners `(x, y)` to `(x + 1, y + 1)`, and the last texel of a row, `x = width - 1`,
+/// reaches `u = 1`, where it reads sample column `width` through the [`Wrap`]:
+/// [`Wrap::Repeat`] (the default) takes column 0 there, so a map that does not tile blends its
+/// last column into its first; [`Wrap::Clamp`] takes column `width - 1` again (a terrain or any
+/// map that is not periodic). The same holds for rows. Heights are `s / 65535` in `[0, 1]`,
+/// times the surface's height scale along the prism's normals (`HEIGHT_ONE` is 1).
+///
+/// ```
+/// use nlrt_accel::{HeightField, Wrap};
+/// // 2 x 2 samples, 0 on the left column and 65535 on the right.
+/// let samples = vec![0, u16::MAX, 0, u16::MAX];
+/// // Texel (1, 0), from u = 1/2 to u = 1, reads columns 1 and 2: with Repeat column 2 is
+/// // column 0 again (the ramp falls back to 0), with Clamp it is column 1 (it stays at 1).
+/// let repeat = HeightField::new(2, 2, samples.clone(), Wrap::Repeat).unwrap();
+/// let clamp = HeightField::new(2, 2, samples, Wrap::Clamp).unwrap();
+/// assert_eq!(repeat.texel_bounds(0, 1, 0), [0, u16::MAX]);
+/// assert_eq!(clamp.texel_bounds(0, 1, 0), [u16::MAX, u16::MAX]);
+/// ```
 #[derive(Clone, Debug)]
 pub struct HeightField {
     width: usize,

@@ -70,6 +70,26 @@ mod test_util;
 mod texel_test;
 mod tlas;
 
+/// glam 0.34 (with its `f64` types), the vector types of every query. Use this one rather
+/// than a `glam` of your own: one of another version has other `Vec3` types ("expected
+/// `DVec3`, found `DVec3`").
+///
+/// ```
+/// use nlrt_accel::glam::DVec3;
+/// use nlrt_accel::{Hit, Ray, Real};
+/// let ray = Ray::<f64>::new(DVec3::ZERO, DVec3::new(0.0, 0.0, 2.0)).unwrap();
+/// assert_eq!(ray.dir, DVec3::Z); // directions are normalised
+/// fn distance<T: Real>(hit: &Hit<T>) -> f64 {
+///     hit.t.to_f64()
+/// }
+/// # let _ = distance::<f32>;
+/// ```
+pub use nlrt_poly::glam;
+// What a query needs from the lower crates, so that a program depending on this crate alone
+// can build rays and read hits.
+pub use nlrt_poly::Real;
+pub use nlrt_shellmap::{Hit, Ray};
+
 pub use bvh::{ARITY, Aabb, Bvh4, Node4, SlabRay, ray_triangle, sah_lower_bound};
 pub use cells::{CellTriangle, traverse_cells, uv_in_cells};
 pub use displacement::{DisplacedSurface, DisplacementError, SurfaceHit, TexelPart, shell_floor};

@@ -8,7 +8,18 @@ use nlrt_shellmap::Prism;
 
 use crate::bvh::Aabb;
 
-/// Why a base mesh was rejected.
+/// Why a base mesh was rejected. Like every error of this crate it implements
+/// [`core::error::Error`], so `?` carries it into a `Box<dyn Error>`:
+///
+/// ```
+/// use nlrt_accel::BaseMesh;
+/// use nlrt_accel::glam::{DVec2, DVec3};
+/// fn mesh() -> Result<BaseMesh<f64>, Box<dyn std::error::Error>> {
+///     Ok(BaseMesh::new(vec![DVec3::ZERO], vec![], vec![DVec2::ZERO], vec![])?)
+/// }
+/// let message = mesh().unwrap_err().to_string();
+/// assert_eq!(message, "vertex attribute counts differ: 1 positions, 0 normals, 1 uvs");
+/// ```
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum MeshError {
     /// The position, normal and uv arrays differ in length.
@@ -91,6 +102,9 @@ impl fmt::Display for MeshError {
         }
     }
 }
+
+/// A plain error (no source): `?` carries it into `Box<dyn core::error::Error>`.
+impl core::error::Error for MeshError {}
 
 /// A triangle mesh with positions, normals and texture coordinates per vertex. Degenerate
 /// triangles (zero area in world space or in uv space) are allowed: the shell math handles

@@ -87,6 +87,9 @@ impl fmt::Display for ShellError {
     }
 }
 
+/// A plain error (no source): `?` carries it into `Box<dyn core::error::Error>`.
+impl core::error::Error for ShellError {}
+
 /// An object in texture space with its BVH.
 #[derive(Clone, Debug)]
 pub struct ShellObject<T: Real> {

@@ -40,6 +40,9 @@ impl core::fmt::Display for GeometryImageError {
     }
 }
 
+/// A plain error (no source): `?` carries it into `Box<dyn core::error::Error>`.
+impl core::error::Error for GeometryImageError {}
+
 /// A hit on a geometry image.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct GeometryImageHit<T: Real> {
