@@ -610,7 +610,7 @@ impl<T: Real> DisplacedSurface<T> {
         stats: &mut TraversalStats,
     ) -> Option<SurfaceHit<T>> {
         self.search(
-            traced_in_f64(ray),
+            ill_conditioned_in_narrow_type(ray),
             Search::Walk,
             None,
             tri,
@@ -690,7 +690,7 @@ impl<T: Real> DisplacedSurface<T> {
     ) -> Option<SurfaceHit<T>> {
         let mut stats = TraversalStats::default();
         self.search(
-            traced_in_f64(ray),
+            ill_conditioned_in_narrow_type(ray),
             Search::EveryCell,
             None,
             tri,
@@ -814,7 +814,7 @@ impl<T: Real> DisplacedSurface<T> {
             // the walk visit every node (every comparison with NaN fails).
             debug_assert!(nl.is_finite(), "{nl:?} in {prism:?}");
             let hit = self.search(
-                traced_in_f64(&nl),
+                ill_conditioned_in_narrow_type(&nl),
                 Search::Walk,
                 excluded,
                 tri,
@@ -855,7 +855,7 @@ impl<T: Real> DisplacedSurface<T> {
                 let excluded = origin.and_then(|o| o.excluded_in(self.mesh(), tri));
                 let mut stats = TraversalStats::default();
                 let hit = self.search(
-                    traced_in_f64(nl),
+                    ill_conditioned_in_narrow_type(nl),
                     Search::EveryCell,
                     excluded,
                     tri,
@@ -918,7 +918,7 @@ const F64_CONDITION: f64 = 64.0;
 /// in `f32` they admitted every texel of a huge triangle near it (the slow unit `pole-sweep`:
 /// 225M texel tests, 129 s, against 13 us in `f64`). The samples decide which precision
 /// traces the prism, not any answer: either walk is watertight in its own arithmetic.
-fn traced_in_f64<T: Real>(ray: &NonlinearRay<T>) -> bool {
+fn ill_conditioned_in_narrow_type<T: Real>(ray: &NonlinearRay<T>) -> bool {
     let limit = T::from_f64(F64_CONDITION);
     T::MANTISSA_DIGITS < f64::MANTISSA_DIGITS
         && (![T::ZERO, T::HALF, T::ONE]

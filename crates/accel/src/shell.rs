@@ -768,7 +768,7 @@ impl<T: Real> ShellSurface<T> {
         stats: &mut TraversalStats,
     ) -> Option<ShellHit<T>> {
         self.search(
-            traced_in_f64::<T>(),
+            narrower_than_f64::<T>(),
             Search::Walk,
             None,
             tri,
@@ -791,7 +791,7 @@ impl<T: Real> ShellSurface<T> {
         t_max: T,
     ) -> Option<ShellHit<T>> {
         let mut stats = TraversalStats::default();
-        let in_f64 = traced_in_f64::<T>();
+        let in_f64 = narrower_than_f64::<T>();
         self.search(
             in_f64,
             Search::EveryCell,
@@ -835,7 +835,7 @@ impl<T: Real> ShellSurface<T> {
         stats: &mut TraversalStats,
     ) -> Option<ShellHit<T>> {
         let excluded_in = |tri: usize| origin.and_then(|o| o.excluded_in(self.mesh(), tri));
-        if traced_in_f64::<T>() {
+        if narrower_than_f64::<T>() {
             // Traced in `f64` (see `intersect_blas`): each prism's nonlinear ray is set up in
             // `f64` directly, with the ray's part once, not first in `T`.
             let wide = WideRay::new(ray);
@@ -885,7 +885,7 @@ impl<T: Real> ShellSurface<T> {
                 // the walk visit every node (every comparison with NaN fails).
                 debug_assert!(nl.is_finite(), "{nl:?} in {prism:?}");
                 let hit = self.search(
-                    traced_in_f64::<T>(),
+                    narrower_than_f64::<T>(),
                     Search::Walk,
                     excluded,
                     tri,
@@ -915,7 +915,7 @@ impl<T: Real> ShellSurface<T> {
             .intersect_brute_force(ray, t_max, |tri, prism, nl, t_max| {
                 let excluded = origin.and_then(|o| o.excluded_in(self.mesh(), tri));
                 let hit = self.search(
-                    traced_in_f64::<T>(),
+                    narrower_than_f64::<T>(),
                     Search::EveryCell,
                     excluded,
                     tri,
@@ -1057,7 +1057,7 @@ fn straight_patches<T: Real>(prisms: &PrismTlas<T>) -> AffinePatches<f64> {
 }
 
 /// Whether a shell surface in `T` traces its prisms in `f64` (`T` is narrower).
-fn traced_in_f64<T: Real>() -> bool {
+fn narrower_than_f64<T: Real>() -> bool {
     T::MANTISSA_DIGITS < f64::MANTISSA_DIGITS
 }
 

@@ -5,8 +5,11 @@
 pub mod animate;
 pub mod bench_json;
 pub mod edit;
+mod median;
 pub mod plot;
 pub mod report;
 pub mod seam_view;
 pub mod solvers;
 pub mod watertight;
+
+pub use median::median;

@@ -34,11 +34,10 @@ pub fn width_from_args(args: &[String], index: usize, default: usize, program: &
     }
 }
 
-/// Median of `xs` (NaN when empty: a variant left out).
+/// Median of `xs` ([`nlrt_render::lab::median`]; NaN when empty: a variant left out).
 // `traversal_counts` times no rounds.
 #[allow(dead_code)]
 #[must_use]
-pub fn median(mut xs: Vec<f64>) -> f64 {
-    xs.sort_by(f64::total_cmp);
-    xs.get(xs.len() / 2).copied().unwrap_or(f64::NAN)
+pub fn median(xs: Vec<f64>) -> f64 {
+    nlrt_render::lab::median(xs).unwrap_or(f64::NAN)
 }

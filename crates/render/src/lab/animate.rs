@@ -9,6 +9,7 @@
 //! against a fresh build's, the render time, and (unless turned off) a check that every
 //! primary hit equals that of a fresh build of the same frame.
 
+use crate::lab::median;
 use crate::scene::scenes::Scene;
 use crate::trace::image::write_png;
 use crate::trace::integrator::{self, Frame, RenderOptions};
@@ -116,18 +117,6 @@ pub struct AnimateReport {
     pub options: AnimateOptions,
     /// Every frame of every method, in the order rendered.
     pub rows: Vec<FrameRow>,
-}
-
-/// The median; of an even count, the mean of the middle two (two rebuilt frames give their
-/// mean, not the slower one).
-fn median(mut v: Vec<f64>) -> Option<f64> {
-    v.sort_by(f64::total_cmp);
-    let n = v.len();
-    match n {
-        0 => None,
-        _ if n % 2 == 1 => Some(v[n / 2]),
-        _ => Some(0.5 * (v[n / 2 - 1] + v[n / 2])),
-    }
 }
 
 /// Pixels whose primary hit distance differs (bit for bit; NaN is no hit).
@@ -494,17 +483,4 @@ pub fn markdown(report: &AnimateReport) -> String {
         ));
     }
     md
-}
-
-#[cfg(test)]
-mod tests {
-    use super::median;
-
-    #[test]
-    fn median_of_even_counts_is_the_mean_of_the_middle_two() {
-        assert_eq!(median(vec![]), None);
-        assert_eq!(median(vec![3.0, 1.0, 2.0]), Some(2.0));
-        assert_eq!(median(vec![4.0, 1.0]), Some(2.5));
-        assert_eq!(median(vec![5.0, 1.0, 4.0, 2.0]), Some(3.0));
-    }
 }

@@ -13,6 +13,7 @@
 //! The partial update is verified: after all strokes, camera rays traced through the updated
 //! surface and through one built from scratch from the same samples hit at the same distances.
 
+use crate::lab::median;
 use crate::scene::material::Rng;
 use crate::scene::scenes::{self, Content, Scene, Size};
 use crate::trace::methods::Nonlinear;
@@ -103,11 +104,6 @@ fn stroke(field: &mut HeightField, brush: usize, rng: &mut Rng) -> [i64; 4] {
     ]
 }
 
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v.get(v.len() / 2).copied().unwrap_or(f64::NAN)
-}
-
 /// Runs the measurement on the built-in mountain.
 ///
 /// # Errors
@@ -131,7 +127,7 @@ pub fn run(opts: &EditOptions) -> Result<EditReport, String> {
         partial.push(start.elapsed().as_secs_f64());
     }
     let partial_max_seconds = partial.iter().copied().fold(0.0, f64::max);
-    let partial_seconds = median(partial);
+    let partial_seconds = median(partial).unwrap_or(f64::NAN);
     // Verify before the full rebuilds below overwrite the partially updated pyramid.
     let (verified_rays, verify_mismatches) = verify(&scene, &surface);
     let mut rebuilds = Vec::new();
@@ -160,7 +156,7 @@ pub fn run(opts: &EditOptions) -> Result<EditReport, String> {
         strokes: opts.strokes,
         partial_seconds,
         partial_max_seconds,
-        rebuild_seconds: median(rebuilds),
+        rebuild_seconds: median(rebuilds).unwrap_or(f64::NAN),
         tessellated_seconds,
         geometry_image_seconds,
         verified_rays,
