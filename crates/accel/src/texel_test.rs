@@ -2,10 +2,10 @@
 //! microtriangles, watertight along the texel's edges and the base triangle's (the piece
 //! search of `DisplacedSurface::intersect_texel`).
 
-use nlrt_poly::{QuadraticBatch, Real, decided_sign, solve_cubic_in, solve_quadratic_in};
+use nlrt_poly::{QuadraticBatch, Real, Vector3, decided_sign, solve_cubic_in, solve_quadratic_in};
 use nlrt_shellmap::{
-    BaseEdges, Hit, NonlinearRay, Prism, TextureCurve, alpha_beta_eq11, piece_clear_in_f64,
-    planes_agree_in_f64, root_decidedly_outside_in_f64,
+    BaseEdges, Hit, NonlinearRay, Prism, TextureCurve, TexturePlane, alpha_beta_eq11,
+    piece_clear_in_f64, planes_agree_in_f64, root_decidedly_outside_in_f64,
 };
 
 use crate::displacement::{DisplacedSurface, TexelPart, plane_of};
@@ -259,6 +259,20 @@ impl<T: Real> DisplacedSurface<T> {
             (t > t_top && inside && t >= t_min && t <= t_max)
                 .then(|| Hit::at(prism, t, alpha, beta, C::ZERO))
         };
+        // The floor stands for a crossing at the base only where the ray came down from above
+        // the surface: where, at the piece's top `b`, the curve is decidedly below this
+        // texel's plane, it came in under the sheet (through the prism's side at an open
+        // border, or from below) and meets nothing on its way to the base. The cubic is `D`
+        // times the plane's value, whose sign along `h` is that of `n_h` above the plane.
+        let below_at_top = |cubic: &[C; 4], plane: &TexturePlane<C>, b: C| -> bool {
+            match (decided_sign(cubic, b), decided_sign(&ray.d, b)) {
+                (Some(value_positive), Some(d_positive)) => {
+                    let above = value_positive == (d_positive == (plane.normal.z() > C::ZERO));
+                    !above
+                }
+                _ => false,
+            }
+        };
         let mut floor: Option<(Hit<C>, TexelPart)> = None;
         let mut previous: Option<bool> = None; // location of the piece before the split point
         for i in 0..splits.len() {
@@ -309,6 +323,7 @@ impl<T: Real> DisplacedSurface<T> {
                 let (b, edge_b) = splits[i + 1];
                 let (cubic, abh, part, plane) = side(lower);
                 if a == C::ZERO
+                    && !below_at_top(cubic, plane, b)
                     && let Some(hit) = floor_hit(b, t_max)
                     && !skipped(part, abh, [hit.alpha, hit.beta, C::ZERO], hit.t)
                 {
