@@ -194,6 +194,20 @@ pub struct ShellHit<T: Real> {
     pub object_triangle: u32,
 }
 
+impl<T: Real> ShellHit<T> {
+    /// The distance along the ray (`hit.t`).
+    #[must_use]
+    pub fn t(&self) -> T {
+        self.hit.t
+    }
+
+    /// The hit's world position on `ray`, the ray that found it (`origin + t dir`).
+    #[must_use]
+    pub fn position(&self, ray: &Ray<T>) -> T::Vec3 {
+        ray.at(self.hit.t)
+    }
+}
+
 /// A base mesh whose shell holds an object tiled `tiling x tiling` times per unit of uv.
 #[derive(Clone, Debug)]
 pub struct ShellSurface<T: Real> {
@@ -822,6 +836,20 @@ impl<T: Real> ShellSurface<T> {
     pub fn occluded(&self, ray: &Ray<T>, t_min: T, t_max: T, stats: &mut TraversalStats) -> bool {
         self.walk_tlas(ray, [t_min, t_max], Query::Any, None, stats)
             .is_some()
+    }
+
+    /// The nearest hit with `t` in `[t_min, t_max]`, without counters: as
+    /// [`ShellSurface::intersect`].
+    #[must_use]
+    pub fn nearest_hit(&self, ray: &Ray<T>, t_min: T, t_max: T) -> Option<ShellHit<T>> {
+        self.intersect(ray, t_min, t_max, &mut TraversalStats::default())
+    }
+
+    /// Whether `ray` meets the object at some `t` in `[t_min, t_max]`, without counters: as
+    /// [`ShellSurface::occluded`].
+    #[must_use]
+    pub fn any_hit(&self, ray: &Ray<T>, t_min: T, t_max: T) -> bool {
+        self.occluded(ray, t_min, t_max, &mut TraversalStats::default())
     }
 
     /// The TLAS walk of [`ShellSurface::intersect`], [`ShellSurface::occluded`] and their
