@@ -68,12 +68,6 @@ pub fn builtin_list() -> String {
     )
 }
 
-/// The built-in displacement scenes `nlrt watertight` is meant for, each once: the judged
-/// ones, the ghost-hit tori, the seam scenes, the cone fur and the cylinder.
-pub fn judged_scene_names() -> Vec<&'static str> {
-    names(Tag::Watertight)
-}
-
 /// Help for a scene argument: `what` (built-in scenes listed) or a scene file.
 pub fn scene_help(what: &str) -> String {
     format!(

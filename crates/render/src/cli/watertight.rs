@@ -22,28 +22,10 @@ impl WatertightCommand {
             frames,
             output,
         } = self;
-        let built = if scene.ends_with(".toml") {
-            match nlrt_render::scene::scene_file::load(std::path::Path::new(&scene)) {
-                Ok(s) => s,
-                Err(e) => return fail("watertight", e),
-            }
-        } else {
-            let known = scenes::is_builtin(&scene);
-            match scenes::builtin(&scene, scene_size.into()).filter(|_| known) {
-                Some(s) => s,
-                None => {
-                    return fail(
-                        "watertight",
-                        format!(
-                            "unknown scene '{scene}' (scenes: {}, or a scene file *.toml)",
-                            judged_scene_names().join(", ")
-                        ),
-                    );
-                }
-            }
+        let built = match resolve_scene(&scene, scene_size.into(), seam_rule) {
+            Ok(built) => built,
+            Err(e) => return fail("watertight", e),
         };
-        let mut built = built;
-        built.set_seam_rule(seam_rule);
         if let Some(k) = frame
             && k >= frames
         {
