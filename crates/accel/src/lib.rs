@@ -92,7 +92,9 @@ pub use nlrt_shellmap::{Hit, Ray};
 
 pub use bvh::{ARITY, Aabb, Bvh4, Node4, SlabRay, ray_triangle, sah_lower_bound};
 pub use cells::{CellTriangle, traverse_cells, uv_in_cells};
-pub use displacement::{DisplacedSurface, DisplacementError, SurfaceHit, TexelPart, shell_floor};
+pub use displacement::{
+    DisplacedSurface, Displacement, DisplacementError, SurfaceHit, TexelPart, shell_floor,
+};
 pub use heightfield::{HEIGHT_ONE, HeightField, HeightMapError, MAX_SAMPLES_PER_SIDE, Wrap};
 pub use mesh::{BaseMesh, MeshError, prism_bounds};
 pub use pose::{PoseUpdate, TlasUpdate};
