@@ -67,7 +67,7 @@ mod stack;
 mod stats;
 #[cfg(test)]
 mod test_util;
-mod texel_test;
+mod texel_hit;
 mod tlas;
 
 /// glam 0.34 (with its `f64` types), the vector types of every query. Use this one rather
