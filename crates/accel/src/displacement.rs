@@ -5,7 +5,7 @@ use core::fmt;
 use nlrt_poly::quadratic_range;
 use nlrt_poly::{Real, Vector2, Vector3};
 use nlrt_shellmap::{
-    BaseEdges, Hit, NonlinearRay, Prism, Ray, TextureCurve, TexturePlane, facing_unit, world_normal,
+    BaseEdges, NonlinearRay, Prism, Ray, TextureCurve, TexturePlane, facing_unit, world_normal,
 };
 
 use crate::affine::{AffinePatches, walk_straight};
@@ -18,6 +18,7 @@ use crate::pose::{PoseUpdate, TlasUpdate};
 use crate::precision::{PrismSearch, Search};
 use crate::seam::{SeamRule, Seams};
 use crate::stats::TraversalStats;
+use crate::surface_hit::{SurfaceHit, TexelPart};
 use crate::tlas::{MAX_TEXEL_COORDINATE, MAX_TEXEL_RANGE, PrismTlas, Query, RootNodes, SetupError};
 
 /// Why a displaced surface could not be built.
@@ -84,100 +85,6 @@ impl core::error::Error for DisplacementError {}
 /// `(n_alpha, n_beta, n_h, K)` (Eq. 10): `alpha = 0`, `beta = 0`, `alpha + beta = 1`.
 pub(crate) const WALL_PLANES: [[i32; 4]; 3] = [[1, 0, 0, 0], [0, 1, 0, 0], [1, 1, 0, -1]];
 
-/// Which part of a texel was hit.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum TexelPart {
-    /// The microtriangle `(x, y), (x + 1, y), (x + 1, y + 1)`.
-    Lower,
-    /// The microtriangle `(x, y), (x + 1, y + 1), (x, y + 1)`.
-    Upper,
-    /// The whole texel, flat (all four corners at one height; sec. 5.4).
-    Flat,
-    /// The seam wall on base edge `edge` ([`crate::EDGE_VERTICES`]) of the hit's triangle,
-    /// between the two sides' heights ([`SeamRule::Closed`]); `texel` is the texel of this
-    /// side at the hit.
-    Wall {
-        /// The base edge.
-        edge: u8,
-    },
-}
-
-impl TexelPart {
-    /// The part's index among the texel's elements (`crate::leaving`): the two
-    /// microtriangles, the flat texel, the seam walls of the three base edges.
-    #[must_use]
-    pub(crate) fn index(self) -> u32 {
-        match self {
-            Self::Lower => 0,
-            Self::Upper => 1,
-            Self::Flat => 2,
-            Self::Wall { edge } => 3 + u32::from(edge),
-        }
-    }
-}
-
-/// How a height map displaces a base mesh: the named form of the arguments of
-/// [`DisplacedSurface::with_midlevel`], for [`DisplacedSurface::with_displacement`]. Start
-/// from [`Displacement::new`] (a height scale; tiling 1, midlevel 0, seams closed) and change
-/// what differs.
-///
-/// ```
-/// use nlrt_accel::{Displacement, SeamRule};
-/// let d = Displacement { tiling: 4.0, midlevel: 0.5, ..Displacement::new(0.1f64) };
-/// assert_eq!((d.height_scale, d.seam_rule), (0.1, SeamRule::Closed));
-/// ```
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Displacement<T> {
-    /// The world length of a height of 1 (samples of 65535) along the mesh's normals.
-    pub height_scale: T,
-    /// How many times the map repeats per unit of uv, along u and v alike.
-    pub tiling: T,
-    /// The height in `[0, 1]` that stays on the base mesh (0: the map only pushes out).
-    pub midlevel: T,
-    /// How uv and normal seams are treated ([`SeamRule::Closed`]: crack-free).
-    pub seam_rule: SeamRule,
-}
-
-impl<T: Real> Displacement<T> {
-    /// `height_scale`, with a tiling of 1, midlevel 0 and closed seams.
-    #[must_use]
-    pub fn new(height_scale: T) -> Self {
-        Self {
-            height_scale,
-            tiling: T::ONE,
-            midlevel: T::ZERO,
-            seam_rule: SeamRule::Closed,
-        }
-    }
-}
-
-/// A hit on a displaced surface.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct SurfaceHit<T: Real> {
-    /// The hit in the prism's coordinates.
-    pub hit: Hit<T>,
-    /// Base triangle.
-    pub triangle: u32,
-    /// Texel (in the infinite, tiled grid).
-    pub texel: [i32; 2],
-    /// Part of the texel.
-    pub part: TexelPart,
-}
-
-impl<T: Real> SurfaceHit<T> {
-    /// The distance along the ray (`hit.t`).
-    #[must_use]
-    pub fn t(&self) -> T {
-        self.hit.t
-    }
-
-    /// The hit's world position on `ray`, the ray that found it (`origin + t dir`).
-    #[must_use]
-    pub fn position(&self, ray: &Ray<T>) -> T::Vec3 {
-        ray.at(self.hit.t)
-    }
-}
-
 /// A displacement-mapped mesh: base mesh, height field, height scale and tiling, with the
 /// TLAS over its prisms and the per-triangle roots into the height field's pyramid.
 ///
@@ -237,38 +144,6 @@ impl<T: Real> DisplacedSurface<T> {
         tiling: T,
     ) -> Result<Self, DisplacementError> {
         Self::with_seam_rule(mesh, field, height_scale, tiling, SeamRule::Closed)
-    }
-
-    /// The surface `displacement` describes: [`DisplacedSurface::with_midlevel`] with named
-    /// arguments.
-    ///
-    /// ```
-    /// use nlrt_accel::glam::{DVec2, DVec3};
-    /// use nlrt_accel::{BaseMesh, Displacement, DisplacedSurface, HeightField, Ray, Wrap};
-    /// let p = vec![DVec3::ZERO, DVec3::X, DVec3::new(1.0, 1.0, 0.0), DVec3::Y];
-    /// let uv = p.iter().map(|p| DVec2::new(p.x, p.y)).collect();
-    /// let mesh = BaseMesh::new(p, vec![DVec3::Z; 4], uv, vec![[0, 1, 2], [0, 2, 3]]).unwrap();
-    /// let field = HeightField::new(4, 4, vec![u16::MAX; 16], Wrap::Clamp).unwrap();
-    /// let push_in_and_out = Displacement { midlevel: 0.5, ..Displacement::new(2.0) };
-    /// let surface = DisplacedSurface::with_displacement(mesh, field, push_in_and_out).unwrap();
-    /// let ray = Ray::new(DVec3::new(0.3, 0.6, 3.0), -DVec3::Z).unwrap();
-    /// assert_eq!(surface.nearest_hit(&ray, 0.0, f64::INFINITY).unwrap().t(), 2.0);
-    /// ```
-    ///
-    /// # Errors
-    /// As [`DisplacedSurface::with_midlevel`].
-    pub fn with_displacement(
-        mesh: BaseMesh<T>,
-        field: HeightField,
-        displacement: Displacement<T>,
-    ) -> Result<Self, DisplacementError> {
-        let Displacement {
-            height_scale,
-            tiling,
-            midlevel,
-            seam_rule,
-        } = displacement;
-        Self::with_midlevel(mesh, field, height_scale, tiling, seam_rule, midlevel)
     }
 
     /// [`DisplacedSurface::new`] with the seams treated by `rule` ([`SeamRule::Open`] keeps
@@ -844,34 +719,6 @@ impl<T: Real> DisplacedSurface<T> {
     pub fn occluded(&self, ray: &Ray<T>, t_min: T, t_max: T, stats: &mut TraversalStats) -> bool {
         self.walk_tlas(ray, [t_min, t_max], Query::Any, None, stats)
             .is_some()
-    }
-
-    /// The nearest hit with `t` in `[t_min, t_max]`, without counters: as
-    /// [`DisplacedSurface::intersect`], whose [`TraversalStats`] a renderer rarely reads.
-    ///
-    /// ```
-    /// use nlrt_accel::glam::{DVec2, DVec3};
-    /// use nlrt_accel::{BaseMesh, DisplacedSurface, HeightField, Ray, Wrap};
-    /// let p = vec![DVec3::ZERO, DVec3::X, DVec3::new(1.0, 1.0, 0.0), DVec3::Y];
-    /// let uv = p.iter().map(|p| DVec2::new(p.x, p.y)).collect();
-    /// let mesh = BaseMesh::new(p, vec![DVec3::Z; 4], uv, vec![[0, 1, 2], [0, 2, 3]]).unwrap();
-    /// let field = HeightField::new(4, 4, vec![u16::MAX; 16], Wrap::Clamp).unwrap();
-    /// let surface = DisplacedSurface::new(mesh, field, 0.5, 1.0).unwrap();
-    /// let ray = Ray::new(DVec3::new(0.3, 0.6, 2.0), -DVec3::Z).unwrap();
-    /// let hit = surface.nearest_hit(&ray, 0.0, f64::INFINITY).unwrap();
-    /// assert_eq!(hit.position(&ray), DVec3::new(0.3, 0.6, 0.5));
-    /// assert!(surface.any_hit(&ray, 0.0, 2.0) && !surface.any_hit(&ray, 0.0, 1.0));
-    /// ```
-    #[must_use]
-    pub fn nearest_hit(&self, ray: &Ray<T>, t_min: T, t_max: T) -> Option<SurfaceHit<T>> {
-        self.intersect(ray, t_min, t_max, &mut TraversalStats::default())
-    }
-
-    /// Whether `ray` meets the surface at some `t` in `[t_min, t_max]`, without counters: as
-    /// [`DisplacedSurface::occluded`].
-    #[must_use]
-    pub fn any_hit(&self, ray: &Ray<T>, t_min: T, t_max: T) -> bool {
-        self.occluded(ray, t_min, t_max, &mut TraversalStats::default())
     }
 
     /// The TLAS walk of [`DisplacedSurface::intersect`], [`DisplacedSurface::occluded`] and

@@ -5,10 +5,11 @@
 use nlrt_poly::{Real, Vector3};
 use nlrt_shellmap::Ray;
 
-use crate::displacement::{DisplacedSurface, SurfaceHit, TexelPart};
+use crate::displacement::DisplacedSurface;
 use crate::leaving::{Element, Origin, TOUCH_RADIUS, Touch, texel_length, up_crossing};
 use crate::shell::{ShellHit, ShellSurface};
 use crate::stats::TraversalStats;
+use crate::surface_hit::{SurfaceHit, TexelPart};
 use crate::tlas::Query;
 
 impl<T: Real> DisplacedSurface<T> {

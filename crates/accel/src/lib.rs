@@ -52,12 +52,14 @@ mod affine;
 mod bvh;
 mod cells;
 mod displacement;
+mod displacement_params;
 mod heightfield;
 mod leaving;
 mod leaving_queries;
 mod mesh;
 mod object_edges;
 mod object_hull;
+mod plain_queries;
 mod pose;
 mod precision;
 mod seam;
@@ -65,6 +67,7 @@ mod seam_walls;
 mod shell;
 mod stack;
 mod stats;
+mod surface_hit;
 #[cfg(test)]
 mod test_util;
 mod texel_hit;
@@ -92,15 +95,15 @@ pub use nlrt_shellmap::{Hit, Ray};
 
 pub use bvh::{ARITY, Aabb, Bvh4, Node4, SlabRay, ray_triangle, sah_lower_bound};
 pub use cells::{CellTriangle, traverse_cells, uv_in_cells};
-pub use displacement::{
-    DisplacedSurface, Displacement, DisplacementError, SurfaceHit, TexelPart, shell_floor,
-};
+pub use displacement::{DisplacedSurface, DisplacementError, shell_floor};
+pub use displacement_params::Displacement;
 pub use heightfield::{HEIGHT_ONE, HeightField, HeightMapError, MAX_SAMPLES_PER_SIDE, Wrap};
 pub use mesh::{BaseMesh, MeshError, prism_bounds};
 pub use pose::{PoseUpdate, TlasUpdate};
 pub use seam::{EDGE_VERTICES, NO_SEAM, SeamEdge, SeamRule, SeamSide, Seams, edge_parameter};
 pub use shell::{ShellError, ShellHit, ShellObject, ShellSurface};
 pub use stats::TraversalStats;
+pub use surface_hit::{SurfaceHit, TexelPart};
 pub use tlas::{MAX_TEXEL_COORDINATE, MAX_TEXEL_RANGE, RootNodes};
 
 /// The README's examples, run by `cargo test --doc`.

@@ -5,9 +5,10 @@
 use nlrt_poly::{Real, Vector2, solve_quadratic_in};
 use nlrt_shellmap::{BaseEdges, Hit, NonlinearRay, Prism, alpha_beta_eq11};
 
-use crate::displacement::{DisplacedSurface, SurfaceHit, TexelPart, WALL_PLANES};
+use crate::displacement::{DisplacedSurface, WALL_PLANES};
 use crate::leaving::Exclusion;
 use crate::seam::{EDGE_VERTICES, NO_SEAM, edge_parameter};
+use crate::surface_hit::{SurfaceHit, TexelPart};
 
 impl<T: Real> DisplacedSurface<T> {
     /// `hit`, or a nearer hit on a seam wall of triangle `tri` (only with

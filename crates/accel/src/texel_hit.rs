@@ -8,8 +8,9 @@ use nlrt_shellmap::{
     piece_clear_in_f64, planes_agree_in_f64, root_decidedly_outside_in_f64,
 };
 
-use crate::displacement::{DisplacedSurface, TexelPart, plane_of};
+use crate::displacement::{DisplacedSurface, plane_of};
 use crate::leaving::{Exclusion, up_crossing};
+use crate::surface_hit::TexelPart;
 
 impl<T: Real> DisplacedSurface<T> {
     /// The nearest hit on texel `(x, y)` with `t` in `[t_min, t_max]`.
