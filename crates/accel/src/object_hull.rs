@@ -250,6 +250,7 @@ impl<C: Real> PrismHull<C> {
 mod tests {
     extern crate std;
     use super::*;
+    use nlrt_poly::lanes4::Portable4;
     use nlrt_shellmap::{NonlinearRay, TextureCurve};
 
     /// Which prisms a case draws.
@@ -263,7 +264,8 @@ mod tests {
         UvSliver,
     }
 
-    /// Every box the curve's exact box test enters (`TextureCurve::box_pieces`, the test the
+    /// The vector step (`Real::Four`) gives the portable lanes' decisions and entry bits. Every
+    /// box the curve's exact box test enters (`TextureCurve::box_pieces`, the test the
     /// hull replaces), clipped to the triangle's uv box as the hull clips it, is entered by
     /// the hull test, no later: on sheared, far and sliver prisms, with rays aimed at points
     /// inside the prism (some grazing its layers, whose curves have poles) and boxes from a
@@ -427,7 +429,20 @@ mod tests {
                     );
                     points += 1;
                 }
-                let (_, met) = hull.entries(lo, hi, 0b1111, C::ZERO, C::INFINITY);
+                let (t, met) = hull.entries(lo, hi, 0b1111, C::ZERO, C::INFINITY);
+                // The native lanes give the portable lanes' (the scalar operations') bits.
+                let (t_portable, met_portable) =
+                    hull.entries_in::<Portable4<C>>(lo, hi, 0b1111, C::ZERO, C::INFINITY);
+                assert_eq!(met, met_portable, "{family:?} case {case}");
+                for c in 0..4 {
+                    if met >> c & 1 == 1 {
+                        assert_eq!(
+                            t[c].to_bits_u64(),
+                            t_portable[c].to_bits_u64(),
+                            "case {case}"
+                        );
+                    }
+                }
                 for c in 0..4 {
                     let clipped_lo: [C; 3] = core::array::from_fn(|a| {
                         if a < 2 {
